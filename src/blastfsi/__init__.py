@@ -1,0 +1,12 @@
+"""blastfsi: air-blast and blast-structure interaction solvers built on JAX.
+
+float64 is the default precision (DESIGN.md); set ``BLASTFSI_X64=0`` before the
+first import to compute in float32.
+"""
+import os
+
+import jax
+
+jax.config.update("jax_enable_x64", os.environ.get("BLASTFSI_X64", "1") != "0")
+
+__version__ = "0.1.0"

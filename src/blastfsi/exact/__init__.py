@@ -1,0 +1,1 @@
+"""Exact and closed-form references, as validated callables."""

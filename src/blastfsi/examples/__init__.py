@@ -1,0 +1,1 @@
+"""Shipped example scenarios (TOML files in this package)."""

@@ -1,0 +1,12 @@
+"""von Neumann-Richtmyer staggered Lagrangian solver for planar 1D gas flow
+with a free-standing rigid plate (seed 002, Sec. 2)."""
+from blastfsi.lagrangian1d.scheme import (
+    Boundaries,
+    Numerics,
+    State,
+    advance,
+    initial_state,
+    total_energy,
+)
+
+__all__ = ["Boundaries", "Numerics", "State", "advance", "initial_state", "total_energy"]

@@ -1,0 +1,231 @@
+"""von Neumann-Richtmyer (vNR) scheme of seed 002, Eqs. (1)-(23), as pure JAX kernels.
+
+Notation (ERRATA 002-1): nodes n = 0..N carry position x and velocity v; zones
+n+1/2 carry mass m, specific internal energy e and the artificial viscous
+pressure q. Velocities live at half time levels (leapfrog), everything else at
+whole levels.
+
+Sign convention: the paper's Q (Eq. 5) is <= 0 and enters as p = p_eos - Q; here
+q = -Q >= 0 and p = p_eos + q.
+
+Departures from the printed paper, each argued in docs/theory.md:
+* Eq. (9) uses 1/2 (dt_j + dt_{j+1}) (ERRATA 002-2).
+* Eq. (12) uses the current zone density rho (not the reference rho0) in both
+  viscous terms, the classical vNR form; rho0 Dx = rho0_ref DX makes the two
+  differ only by the compression factor.
+* The plate (Eqs. 7, 21-23) is the end node carrying the plate's areal mass
+  plus the lumped half-mass of its neighbouring zone, advanced with the same
+  leapfrog as every other node. The paper's forward-Euler update with the
+  plate mass alone is unstable for plates lighter than a zone
+  (beta_s > ~10^3 at 5000 cells); the lumped form converges to it as the zone
+  mass -> 0 and stays stable for any plate mass.
+* The time step (Eq. 20, ERRATA 002-5) includes the viscous signal speed so the
+  scheme stays stable inside shocks: dt = alpha min dx / (s + sqrt(s^2 + a^2)),
+  s = 2 (K1^2 |dv| + K2 a) for compressing zones, dv = v_{n+1} - v_n < 0 the
+  latest node-velocity difference (the stability bound of the explicit scheme
+  with a diffusive q, cf. Benson, CMAME 99, 1992). With |dv| in s a zone can
+  never be crushed in one step, also at a piston's first step.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+
+class Numerics(NamedTuple):
+    """Scheme parameters (traced, so an ensemble may vary them)."""
+
+    gamma: jnp.ndarray  # ratio of specific heats
+    K1: jnp.ndarray  # quadratic viscosity coefficient, Eq. (5)
+    K2: jnp.ndarray  # linear viscosity coefficient, Eq. (5)
+    cfl: jnp.ndarray  # alpha in Eq. (20), 0 < alpha <= 1
+
+
+class Boundaries(NamedTuple):
+    """Boundary data. Static flags choose the kind; arrays carry the values.
+
+    Left end: prescribed velocity (piston; 0 = fixed wall / symmetry plane) when
+    ``left_velocity_set`` else a prescribed pressure (free end).
+    Right end: fixed wall when ``right_fixed`` else a node of extra mass
+    ``right_mass`` (the plate, kg/m^2; 0 = free end) loaded by ``right_pressure``
+    on its free side (the back pressure p0 of 002 Sec. 2).
+    """
+
+    left_velocity: jnp.ndarray
+    left_pressure: jnp.ndarray
+    right_mass: jnp.ndarray
+    right_pressure: jnp.ndarray
+
+
+class State(NamedTuple):
+    x: jnp.ndarray  # node positions at t_j, (N+1,)
+    v: jnp.ndarray  # node velocities at t_{j-1/2}, (N+1,)
+    e: jnp.ndarray  # zone specific internal energy at t_j, (N,)
+    q: jnp.ndarray  # zone viscous pressure at t_{j-1/2}, (N,)
+    zone_mass: jnp.ndarray  # (N,), constant in time (Lagrangian)
+    t: jnp.ndarray
+    dt_prev: jnp.ndarray  # dt_j, the step that led to t_j (0 at start)
+    step: jnp.ndarray
+    face_impulse: jnp.ndarray  # int (p_{N-1/2} - p_right) dt on the right end
+    peak_face_overpressure: jnp.ndarray
+    boundary_work: jnp.ndarray  # work done on the system by the boundaries
+    fault: jnp.ndarray  # -1 while healthy, else index of the first bad zone
+    hist: jnp.ndarray  # (n_samples, N_HIST) histories sampled in compiled code
+    hist_next: jnp.ndarray  # index of the next history sample to record
+
+
+HISTORY_COLUMNS = (
+    ("time", "s"),
+    ("plate_displacement", "m"),
+    ("plate_velocity", "m/s"),
+    ("plate_overpressure", "Pa"),
+    ("plate_impulse", "Pa*s"),
+    ("surface_impulse", "Pa*s"),
+    ("left_overpressure", "Pa"),
+    ("energy_error", "J/m^2"),
+)
+N_HIST = len(HISTORY_COLUMNS)
+
+
+def zone_pressure(zone_mass, x, e, q, gamma):
+    """002 Eq. (11) (with q = -Q): p = (gamma-1) rho e + q, rho = m / dx."""
+    return (gamma - 1.0) * zone_mass / (x[1:] - x[:-1]) * e + q
+
+
+def node_masses(zone_mass, right_mass):
+    """Lumped node masses: half of each neighbouring zone, plus the plate at node N.
+    Equivalent to rho0^(n) DX in 002 Eq. (10) with Eq. (18)."""
+    half = 0.5 * zone_mass
+    m = jnp.concatenate([half[:1], half[1:] + half[:-1], half[-1:]])
+    return m.at[-1].add(right_mass)
+
+
+def stable_dt(dx, e, v, num: Numerics):
+    """002 Eq. (20) with the viscous signal speed (see module docstring)."""
+    a = jnp.sqrt(num.gamma * (num.gamma - 1.0) * e)
+    dv = v[1:] - v[:-1]
+    s = jnp.where(dv < 0.0, 2.0 * (num.K1**2 * jnp.abs(dv) + num.K2 * a), 0.0)
+    return num.cfl * jnp.min(dx / (s + jnp.sqrt(s * s + a * a)))
+
+
+def viscous_pressure(rho_mid, dx_mid, D, a, num: Numerics):
+    """002 Eq. (12), q = -Q >= 0, active in compression only (Eq. 5)."""
+    q = rho_mid * (num.K1 * dx_mid * D) ** 2 + rho_mid * num.K2 * a * dx_mid * jnp.abs(D)
+    return jnp.where(D < 0.0, q, 0.0)
+
+
+def implicit_energy(e, q, rho_mid, dtD, gamma):
+    """002 Eq. (16) with Q = -q: trapezoidal (implicit) p dV work of the gas pressure."""
+    return (e + ((1.0 - gamma) * 0.5 * e - q / rho_mid) * dtD) / (1.0 + 0.5 * (gamma - 1.0) * dtD)
+
+
+def total_energy(state: State, bc: Boundaries):
+    """Internal + kinetic energy per unit area (kinetic from the half-step velocities)."""
+    nm = node_masses(state.zone_mass, bc.right_mass)
+    return jnp.sum(state.zone_mass * state.e) + 0.5 * jnp.sum(nm * state.v**2)
+
+
+def vnr_step(s: State, dt, num: Numerics, bc: Boundaries, left_velocity_set: bool, right_fixed: bool):
+    """Advance one time step dt = dt_{j+1} (002 Sec. 2 sequence). Pure."""
+    gamma = num.gamma
+    dx = s.x[1:] - s.x[:-1]
+    p = zone_pressure(s.zone_mass, s.x, s.e, s.q, gamma)
+    p_left = p[0] if left_velocity_set else bc.left_pressure
+    p_ext = jnp.concatenate([jnp.reshape(p_left, (1,)), p, jnp.reshape(bc.right_pressure, (1,))])
+    acc = (p_ext[:-1] - p_ext[1:]) / node_masses(s.zone_mass, bc.right_mass)  # Eq. (10), Eq. (23)
+    v = s.v + 0.5 * (s.dt_prev + dt) * acc  # Eq. (9), ERRATA 002-2
+    if left_velocity_set:
+        v = v.at[0].set(bc.left_velocity)
+    if right_fixed:
+        v = v.at[-1].set(0.0)
+    x = s.x + dt * v  # Eq. (8)
+    dx_new = x[1:] - x[:-1]
+    dtD = 2.0 * (dx_new - dx) / (dx_new + dx)  # dt * Eq. (14)
+    dx_mid = 0.5 * (dx + dx_new)  # Eq. (15)
+    rho_mid = 0.5 * s.zone_mass * (1.0 / dx_new + 1.0 / dx)  # Eq. (17)
+    a = jnp.sqrt(gamma * (gamma - 1.0) * s.e)  # Eq. (13)
+    q = viscous_pressure(rho_mid, dx_mid, dtD / dt, a, num)
+    e = implicit_energy(s.e, q, rho_mid, dtD, gamma)
+    work = dt * (p_left * v[0] - bc.right_pressure * v[-1])
+    face_over = p[-1] - bc.right_pressure
+    return s._replace(
+        x=x, v=v, e=e, q=q, t=s.t + dt, dt_prev=dt, step=s.step + 1,
+        face_impulse=s.face_impulse + dt * face_over,
+        peak_face_overpressure=jnp.maximum(s.peak_face_overpressure, face_over),
+        boundary_work=s.boundary_work + work,
+    )
+
+
+def first_fault(s: State):
+    """Index of the first zone with a non-physical state (NaN, tangled zone,
+    non-positive internal energy), or -1 when the state is healthy."""
+    dx = s.x[1:] - s.x[:-1]
+    bad = ~(jnp.isfinite(dx) & (dx > 0.0) & jnp.isfinite(s.e) & (s.e > 0.0) & jnp.isfinite(s.v[1:]))
+    return jnp.where(jnp.any(bad), jnp.argmax(bad), -1)
+
+
+def history_row(s: State, bc: Boundaries, e0, x_right0, right_fixed: bool, gamma):
+    p = zone_pressure(s.zone_mass, s.x, s.e, s.q, gamma)
+    v_plate = 0.0 * s.v[-1] if right_fixed else s.v[-1]
+    plate_impulse = s.face_impulse if right_fixed else bc.right_mass * s.v[-1]
+    energy_error = total_energy(s, bc) - e0 - s.boundary_work
+    return jnp.stack([
+        s.t, s.x[-1] - x_right0, v_plate, p[-1] - bc.right_pressure, plate_impulse,
+        s.face_impulse, p[0] - bc.right_pressure, energy_error,
+    ])
+
+
+def initial_state(x, v, e, zone_mass, n_samples: int) -> State:
+    x = jnp.asarray(x)
+    z = jnp.zeros_like(jnp.asarray(e))
+    zero = jnp.zeros((), x.dtype)
+    return State(
+        x=x, v=jnp.asarray(v), e=jnp.asarray(e), q=z, zone_mass=jnp.asarray(zone_mass),
+        t=zero, dt_prev=zero, step=jnp.zeros((), jnp.int32), face_impulse=zero,
+        peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
+        fault=jnp.asarray(-1, jnp.int32), hist=jnp.full((n_samples, N_HIST), jnp.nan, x.dtype),
+        hist_next=jnp.zeros((), jnp.int32),
+    )
+
+
+def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0,
+            num: Numerics, bc: Boundaries, left_velocity_set: bool, right_fixed: bool) -> State:
+    """Advance in compiled code until t_stop, max_steps more steps, or a fault.
+
+    Steps are shortened to land exactly on t_stop and on every history sample
+    time k * sample_interval, where the history row k is recorded. A step that
+    produces a non-physical state is discarded and ``fault`` set, so the
+    returned state is the last healthy one.
+    """
+    n_samples = s.hist.shape[0]
+    step_limit = s.step + max_steps
+
+    def record(st):
+        row = history_row(st, bc, e0, x_right0, right_fixed, num.gamma)
+        k = jnp.minimum(st.hist_next, n_samples - 1)
+        return st._replace(hist=st.hist.at[k].set(row), hist_next=st.hist_next + 1)
+
+    def next_sample_time(st):
+        return jnp.where(st.hist_next < n_samples, st.hist_next * sample_interval, jnp.inf)
+
+    s = jax.lax.cond((s.hist_next == 0) & (s.step == 0), record, lambda st: st, s)
+
+    def cond(st):
+        return (st.t < t_stop) & (st.step < step_limit) & (st.fault < 0)
+
+    def body(st):
+        dx = st.x[1:] - st.x[:-1]
+        target = jnp.minimum(t_stop, next_sample_time(st))
+        dt_cfl = stable_dt(dx, st.e, st.v, num)
+        lands = st.t + dt_cfl >= target
+        dt = jnp.where(lands, target - st.t, dt_cfl)
+        new = vnr_step(st, dt, num, bc, left_velocity_set, right_fixed)
+        new = new._replace(t=jnp.where(lands, target, new.t))
+        fault = first_fault(new)
+        new = jax.lax.cond(lands & (target == next_sample_time(st)), record, lambda z: z, new)
+        return jax.tree_util.tree_map(lambda good, old: jnp.where(fault >= 0, old, good), new, st)._replace(
+            fault=fault.astype(jnp.int32))
+
+    return jax.lax.while_loop(cond, body, s)

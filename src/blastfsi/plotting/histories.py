@@ -1,0 +1,28 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def plate_histories(file: Path, histories: list[dict], members: list[dict]) -> None:
+    """Four panels: plate overpressure, transmitted impulse, displacement, velocity."""
+    panels = (("plate_overpressure", "overpressure on plate [Pa]"), ("plate_impulse", "transmitted impulse [Pa s]"),
+              ("plate_displacement", "plate displacement [m]"), ("plate_velocity", "plate velocity [m/s]"))
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
+    for ax, (key, label) in zip(axes.flat, panels):
+        for hist, member in zip(histories, members):
+            tag = ", ".join(f"{k.split('.')[-1]}={v:g}" for k, v in member.items()) or None
+            ax.plot(hist["time"] * 1e3, hist[key], lw=1.2, label=tag)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("time [ms]")
+    if len(histories) > 1 and len(histories) <= 12:
+        axes[0, 0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(file, dpi=120)
+    plt.close(fig)
