@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import quad
 
 
 def _exponents(gamma: float):
@@ -35,11 +34,14 @@ def _exponents(gamma: float):
     return a, b, c, d, e, alpha0, alpha1, alpha2, alpha3, alpha4, alpha5
 
 
-def _similarity_profiles(V, gamma):
-    """lambda = r/r_s and f = u/u_2, g = rho/rho_2, h = p/p_2 at parameter V."""
+def _similarity_profiles(dV, gamma):
+    """lambda = r/r_s and f = u/u_2, g = rho/rho_2, h = p/p_2 at parameter
+    V = V0 + dV. Taking dV (not V) keeps x2 = b (c V - 1) = b c dV free of
+    cancellation near the centre, where lambda ~ dV^(-alpha2)."""
     a, b, c, d, e, al0, al1, al2, al3, al4, al5 = _exponents(gamma)
+    V = 2.0 / (3.0 * gamma) + dV
     x1 = a * V
-    x2 = np.maximum(b * (c * V - 1.0), 0.0)
+    x2 = b * c * dV
     x3 = d * (1.0 - e * V)
     x4 = b * (1.0 - c * V / gamma)
     lam = x1 ** (-al0) * x2 ** (-al2) * x3 ** (-al1)
@@ -72,9 +74,7 @@ class PlanarSedov:
         v0, v2 = 2.0 / (3.0 * g), 4.0 / (3.0 * (g + 1.0))
         # Cluster parameter values near the centre, where lambda -> 0 as a power of (V - V0).
         s = np.linspace(0.0, 1.0, 20001)
-        V = v0 + (v2 - v0) * s**6
-        V[0] = v0 * (1 + 1e-15)
-        object.__setattr__(self, "_table", _similarity_profiles(V, g))
+        object.__setattr__(self, "_table", _similarity_profiles((v2 - v0) * s**6, g))
 
     @property
     def alpha(self) -> float:
@@ -107,21 +107,15 @@ class PlanarSedov:
 
 
 def _alpha(gamma: float) -> float:
-    """alpha = E0 t^2/(rho0 r_s^3) from the energy integral over 0 <= lambda <= 1."""
-    v0, v2 = 2.0 / (3.0 * gamma), 4.0 / (3.0 * (gamma + 1.0))
-    rho2_over = (gamma + 1.0) / (gamma - 1.0)
-    # With r_s = K t^(2/3): U = 2/3 r_s/t, u2 = 2U/(g+1), p2 = 2 rho0 U^2/(g+1).
-    def integrand(s):
-        V = v0 + (v2 - v0) * s
-        lam, f, g, h = _similarity_profiles(np.array([V]), gamma)
-        # d lambda / d s by centred difference (smooth inside the interval)
-        ds = 1e-7
-        lp = _similarity_profiles(np.array([v0 + (v2 - v0) * min(s + ds, 1.0)]), gamma)[0]
-        lm = _similarity_profiles(np.array([v0 + (v2 - v0) * max(s - ds, 0.0)]), gamma)[0]
-        dlam = (lp - lm) / (min(s + ds, 1.0) - max(s - ds, 0.0))
-        kinetic = 0.5 * rho2_over * g * (2.0 / (gamma + 1.0)) ** 2 * f**2
-        internal = 2.0 / (gamma + 1.0) * h / (gamma - 1.0)
-        return float(((kinetic + internal) * dlam)[0])
+    """alpha = E0 t^2/(rho0 r_s^3), the energy integral over 0 <= lambda <= 1.
 
-    val, _ = quad(integrand, 1e-12, 1.0, limit=400)
-    return val * (2.0 / 3.0) ** 2
+    With r_s = K t^(2/3): U = 2/3 r_s/t, u2 = 2U/(gamma+1), rho2 = rho0 (gamma+1)/(gamma-1),
+    p2 = 2 rho0 U^2/(gamma+1); integrated by the trapezoidal rule on a parameter
+    grid clustered at the centre (converged to < 1e-7 relative).
+    """
+    v0, v2 = 2.0 / (3.0 * gamma), 4.0 / (3.0 * (gamma + 1.0))
+    s = np.linspace(0.0, 1.0, 400001)
+    lam, f, g, h = _similarity_profiles((v2 - v0) * s**6, gamma)
+    kinetic = 0.5 * (gamma + 1.0) / (gamma - 1.0) * g * (2.0 / (gamma + 1.0)) ** 2 * f**2
+    internal = 2.0 / (gamma + 1.0) * h / (gamma - 1.0)
+    return float(np.trapezoid(kinetic + internal, lam)) * (2.0 / 3.0) ** 2

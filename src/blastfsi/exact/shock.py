@@ -144,3 +144,47 @@ def impulse_ratio_exponential(beta, gamma_R, C_R, fR):
     safe = np.where(near_one, 2.0, b)
     taylor = np.where(near_one, np.exp(-1.0), safe ** (safe / (1.0 - safe)))
     return gamma_R * (C_R * fR / gamma_R) ** (b / (1.0 + b)) * taylor
+
+
+def face_overpressure(plate_velocity, overpressure, p0, rho0, gamma=1.4):
+    """Overpressure on a plate moving at ``plate_velocity`` (>= 0, away from the
+    blast) and struck by the uniform shocked state (p0 + p_s, rho_s, u_s).
+
+    Solves the Riemann problem for the left-facing wave: a shock (Hugoniot) when
+    the plate is slower than u_s, a centred rarefaction (isentrope) when faster:
+    v = u_s - f(p), f the standard wave function. At v = 0 this is C_R p_s
+    (Eq. 25); at v = u_fs (:func:`free_surface_velocity`) it is 0.
+    """
+    from scipy.optimize import brentq
+
+    s = incident_shock(overpressure, p0, rho0, gamma)
+    p1 = p0 + float(s.overpressure)
+    a_coef, b_coef = 2.0 / ((gamma + 1.0) * s.density), (gamma - 1.0) / (gamma + 1.0) * p1
+
+    def wave(p):
+        if p > p1:
+            return (p - p1) * np.sqrt(a_coef / (p + b_coef))
+        return 2.0 * s.sound_speed / (gamma - 1.0) * ((p / p1) ** ((gamma - 1.0) / (2.0 * gamma)) - 1.0)
+
+    p = brentq(lambda q: s.particle_velocity - wave(q) - plate_velocity, 1e-12 * p1, 1e3 * p1, xtol=1e-12 * p1)
+    return p - p0
+
+
+def quasi_steady_plate(overpressure, duration, areal_mass, p0, rho0, gamma=1.4, back_pressure=None):
+    """Plate velocity after ``duration`` from m dv/dt = face_overpressure(v) + p0 - p_back.
+
+    A reference for intermediate plate masses, where Eq. (29) is only an
+    interpolation: it assumes the face pressure follows the plate velocity
+    instantly (the waves the plate sends back are not re-reflected onto it).
+    Exact in the acoustic limit (it then reproduces Eq. 29) and for heavy
+    (v -> 0) and light (v -> u_fs) plates.
+    """
+    from scipy.integrate import solve_ivp
+
+    back = p0 if back_pressure is None else back_pressure
+
+    def rhs(_, y):
+        return [(face_overpressure(y[0], overpressure, p0, rho0, gamma) + p0 - back) / areal_mass]
+
+    sol = solve_ivp(rhs, (0.0, duration), [0.0], rtol=1e-10, atol=1e-12)
+    return float(sol.y[0, -1])

@@ -1,0 +1,56 @@
+"""The command line, the results directory and its files read back with real readers."""
+import json
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+from blastfsi.io.results import read_history
+
+SUMMARY_KEYS = {"plate_velocity", "plate_displacement", "plate_impulse", "peak_overpressure", "beta_s",
+                "reflection_coefficient_theory", "impulse_ratio_theory", "impulse_ratio"}
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "blastfsi.cli", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_examples_listed():
+    proc = cli("examples")
+    assert proc.returncode == 0
+    for name in ("plate1d-uniform", "plate1d-exponential", "plate1d-sedov"):
+        assert name in proc.stdout
+
+
+def test_run_example_json_and_results_directory(tmp_path):
+    out = tmp_path / "res"
+    proc = cli("run", "--example", "plate1d-uniform", "--set", "grid.cells=300", "--set", "domain.length=1.0",
+               "--set", "time.end=0.0016", "--set", "output.plots=true", "--out", str(out), "--json")
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)  # nothing but one JSON object on stdout
+    assert SUMMARY_KEYS <= summary.keys()
+    assert summary["plate_velocity"] > 0 and summary["plate_impulse"] > 0
+    for f in ("scenario.toml", "summary.json", "history.csv", "plots/plate_histories.png", "fields/member0.xdmf"):
+        assert (out / f).is_file(), f
+    hist = read_history(out / "history.csv")
+    assert hist["time"][0] == 0.0 and abs(hist["time"][-1] - 0.0016) < 1e-15
+    header = (out / "history.csv").read_text().splitlines()[0]
+    assert "time [s]" in header and "plate_overpressure [Pa]" in header
+    with h5py.File(out / "fields" / "snap_0010.h5", "r") as f:
+        assert abs(f.attrs["time"] - 0.0016) < 1e-15
+        x = f["member0/coordinates"][:, 0]
+        assert x.size == 301 and np.all(np.diff(x) > 0)
+        assert f["member0/pressure"].shape == (300,)
+    # a second run into the same directory is refused (exit 4), nothing overwritten
+    again = cli("run", "--example", "plate1d-uniform", "--out", str(out))
+    assert again.returncode == 4 and "exists" in again.stderr
+
+
+def test_default_results_directory_is_never_reused(tmp_path):
+    args = ("run", "--example", "plate1d-uniform", "--set", "grid.cells=100", "--set", "domain.length=0.5",
+            "--set", "time.end=0.0008", "--set", "output.fields=0", "--set", "output.plots=false", "--json")
+    assert cli(*args, cwd=tmp_path).returncode == 0
+    assert cli(*args, cwd=tmp_path).returncode == 0
+    assert (tmp_path / "results" / "plate1d-uniform" / "summary.json").is_file()
+    assert (tmp_path / "results" / "plate1d-uniform-2" / "summary.json").is_file()
