@@ -97,18 +97,27 @@ NODE_FIELDS = ("velocity",)
 ZONE_FIELDS = ("density", "pressure", "internal_energy", "viscous_pressure")
 
 
-def _prepare(data: dict):
+def _prepare(data: dict | list[dict]):
+    """A scenario with an optional sweep, or a list of sweep-free scenarios that
+    share grid.cells, time and output settings (e.g. different domain lengths),
+    as (first scenario, member overrides, setups)."""
+    if isinstance(data, list):
+        scs = [parse(d) for d in data]
+        for key in ("grid", "time", "output"):
+            if any(getattr(s, key) != getattr(scs[0], key) for s in scs):
+                raise ScenarioError(f"a batch of scenarios must share its [{key}] table")
+        return scs[0], [{"member": k} for k in range(len(scs))], [plate1d.build(s) for s in scs]
     sc = parse(data)
     members = sc.members()
     member_scs = [member_scenario(data, m) if m else sc for m in members]
-    setups = [plate1d.build(s) for s in member_scs]
-    return sc, members, setups
+    return sc, members, [plate1d.build(s) for s in member_scs]
 
 
-def run(data: dict, out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
+def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
         restart: bool = False, chunk_steps: int = 20_000, dtype=None) -> RunResult:
-    """Run a scenario given as a raw dict. With ``restart``, ``out`` is an
-    existing results directory whose scenario and latest checkpoint are used."""
+    """Run a scenario given as a raw dict (or a list of them, see ``_prepare``)
+    as one batched computation. With ``restart``, ``out`` is an existing
+    results directory whose scenario and latest checkpoint are used."""
     dtype = dtype or (jnp.float64 if jax.config.jax_enable_x64 else jnp.float32)
     sc, members, setups = _prepare(data)
     flags = {(s.left_velocity_set, s.right_fixed) for s in setups}
