@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from blastfsi import simulation  # noqa: E402
+from blastfsi.diagnostics import front_position, l1_relative_error, zone_profile  # noqa: E402
 from blastfsi.exact import shock  # noqa: E402
 from blastfsi.exact.sedov import PlanarSedov  # noqa: E402
 from blastfsi.problems.plate1d import clean_window  # noqa: E402
@@ -135,16 +136,11 @@ def sedov(cells=10000, length=100.0):
             "domain": {"length": length}, "grid": {"cells": cells}, "time": {"end": float(t1 - t0)},
             "output": {"history_samples": 11, "fields": 0, "plots": False}}
     res = simulation.run(data)
-    st = res.state
-    x = np.asarray(st.x[0])
-    xc = 0.5 * (x[1:] + x[:-1])
-    rho = np.asarray(st.zone_mass[0]) / np.diff(x)
-    p = 0.4 * rho * np.asarray(st.e[0]) + np.asarray(st.q[0])
-    _, _, p_exact = blast(xc, t1)
-    p_exact = np.where(xc <= 81.2, p_exact, 1e-6 * P0)
+    xc, dx, p = zone_profile(res.state, 0, 1.4)
+    p_exact = np.where(xc <= 81.2, blast(xc, t1)[2], 1e-6 * P0)
     peak = np.max(p)
-    front = float(np.interp(0.5 * peak, p[::-1], xc[::-1]))  # half-peak crossing on the front
-    l1 = float(np.sum(np.abs(p - p_exact) * np.diff(x)) / np.sum(np.abs(p_exact) * np.diff(x)))
+    front = front_position(xc, p, 0.5 * peak)  # half-peak crossing on the front
+    l1 = l1_relative_error(p, p_exact, dx)
     fig, ax = plt.subplots(figsize=(6.5, 4))
     ax.plot(xc, p / 1e6, label="vNR")
     ax.plot(xc, p_exact / 1e6, "k--", label="exact (Sedov)")

@@ -52,6 +52,9 @@ class SedovIncident(_Strict):
     profile: Literal["sedov"]
     energy: float = Field(gt=0.0, description="explosion energy per unit area, one side of the plane, E0 [J/m^2]")
     front_position: float = Field(gt=0.0, description="shock position at the start of the run [m]")
+    core_fraction: float = Field(0.1, ge=0.0, lt=0.5, description=(
+        "zones closer to the centre than this fraction of front_position are merged into a core of uniform "
+        "density and internal energy (same mass and energy); 0 keeps the exact singular profile"))
 
 
 Incident = Annotated[Union[UniformIncident, ExponentialIncident, SedovIncident], Field(discriminator="profile")]
