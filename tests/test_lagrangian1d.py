@@ -110,3 +110,9 @@ def test_light_plate_reaches_free_surface_velocity():
     ps = 4.49 * P0
     res = simulation.run(uniform_data(plate__beta_s=1e3, grid__cells=800, output__fields=0))
     assert res.summary["plate_velocity"] == pytest.approx(float(shock.free_surface_velocity(ps, P0, RHO0)), rel=1e-2)
+
+
+def test_float32_run_keeps_precision_and_accuracy():
+    res = wall_run(4.49, numerics={"precision": "float32"})
+    assert res.state.x.dtype == jnp.float32 and res.state.hist.dtype == jnp.float32
+    assert res.summary["reflection_coefficient"] == pytest.approx(shock.reflection_coefficient(4.49 * P0, P0), rel=1e-2)

@@ -9,7 +9,7 @@ from importlib import resources
 from pathlib import Path
 
 from blastfsi.io.results import OutputError
-from blastfsi.scenario import ScenarioError, apply_overrides
+from blastfsi.scenario import ScenarioError, apply_overrides, read_toml
 
 EXIT_SCENARIO, EXIT_SIMULATION, EXIT_OUTPUT = 2, 3, 4
 
@@ -81,18 +81,12 @@ def _run(args) -> int:
             raise ScenarioError("--restart continues a run as it was; --set is not allowed")
         if not (out / "scenario.toml").is_file():
             raise OutputError(f"--restart: {out} holds no scenario.toml")
-        data = tomllib.loads((out / "scenario.toml").read_text())
+        data = read_toml(out / "scenario.toml")
     else:
         if args.example:
             data = example_data(args.example)
         else:
-            path = Path(args.scenario)
-            if not path.is_file():
-                raise ScenarioError(f"scenario file not found: {path}")
-            try:
-                data = tomllib.loads(path.read_text())
-            except tomllib.TOMLDecodeError as err:
-                raise ScenarioError(f"{path}: not valid TOML: {err}") from None
+            data = read_toml(args.scenario)
         data = apply_overrides(data, args.overrides)
         name = str(data.get("name", "run"))
         out = Path(args.out) if args.out else _default_out(name)

@@ -102,6 +102,7 @@ class Numerics(_Strict):
     K1: float = Field(1.5, ge=0.0, le=5.0, description="quadratic viscosity coefficient, Eq. (5)")
     K2: float = Field(0.1, ge=0.0, le=2.0, description="linear viscosity coefficient, Eq. (5)")
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="time-step factor alpha, Eq. (20)")
+    precision: Literal["float64", "float32"] = "float64"
 
 
 class Time(_Strict):
@@ -251,17 +252,15 @@ def _deep_copy(d):
     return {k: _deep_copy(v) if isinstance(v, dict) else (list(v) if isinstance(v, list) else v) for k, v in d.items()}
 
 
-def load(path: str | Path, overrides: list[str] = ()) -> tuple[Scenario, dict]:
-    """Read, override and validate a TOML scenario; returns (scenario, raw dict)."""
+def read_toml(path: str | Path) -> dict:
+    """The raw dict of a TOML scenario file (validated later, after any overrides)."""
     path = Path(path)
     if not path.is_file():
         raise ScenarioError(f"scenario file not found: {path}")
     try:
-        data = tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"{path}: not valid TOML: {err}") from None
-    data = apply_overrides(data, list(overrides))
-    return parse(data), data
 
 
 def member_scenario(data: dict, member: dict) -> Scenario:

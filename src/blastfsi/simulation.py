@@ -114,12 +114,12 @@ def _prepare(data: dict | list[dict]):
 
 
 def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
-        restart: bool = False, chunk_steps: int = 20_000, dtype=None) -> RunResult:
+        restart: bool = False, chunk_steps: int = 20_000) -> RunResult:
     """Run a scenario given as a raw dict (or a list of them, see ``_prepare``)
     as one batched computation. With ``restart``, ``out`` is an existing
     results directory whose scenario and latest checkpoint are used."""
-    dtype = dtype or (jnp.float64 if jax.config.jax_enable_x64 else jnp.float32)
     sc, members, setups = _prepare(data)
+    dtype = jnp.float32 if sc.numerics.precision == "float32" or not jax.config.jax_enable_x64 else jnp.float64
     flags = {(s.left_velocity_set, s.right_fixed) for s in setups}
     if len(flags) != 1:
         raise ScenarioError("all ensemble members must share boundary kinds")
