@@ -61,6 +61,12 @@ def test_first_fault_locates_the_bad_zone():
     assert int(scheme.first_fault(st._replace(e=st.e.at[7].set(-1.0)))) == 7
     assert int(scheme.first_fault(st._replace(e=st.e.at[3].set(jnp.nan)))) == 3
     assert int(scheme.first_fault(st._replace(x=st.x.at[12].set(0.5)))) == 11  # tangled: x_12 < x_11
+    # advance refuses to step from a non-physical state and flags it
+    num = scheme.Numerics(*map(jnp.asarray, (1.4, 1.5, 0.1, 0.5)))
+    bc = scheme.Boundaries(*map(jnp.asarray, (0.0, P0, 0.0, P0)))
+    for bad in (st._replace(e=st.e.at[7].set(-1.0)), st._replace(x=st.x.at[12].set(0.5))):
+        out = scheme.advance(bad, 1e-3, 100, 1e-3 / 3, 0.0, 1.0, num, bc, True, False)
+        assert bool(out.faulted) and int(out.step) == 0
 
 
 def test_driver_reports_time_step_location(tmp_path):

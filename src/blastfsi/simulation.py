@@ -187,14 +187,14 @@ def _history_dict(rows: np.ndarray) -> dict:
 
 
 def _check(state: scheme.State, sc: Scenario, last_ckpt) -> None:
-    faults = np.asarray(state.fault)
     where = f"last checkpoint: {last_ckpt}" if last_ckpt else "no checkpoint written yet"
-    if np.any(faults >= 0):
-        k = int(np.argmax(faults >= 0))
-        zone = int(faults[k])
-        x = np.asarray(state.x[k])
+    if np.any(np.asarray(state.faulted)):
+        k = int(np.argmax(np.asarray(state.faulted)))
+        member = jax.tree_util.tree_map(lambda leaf: np.asarray(leaf[k]), state)
+        zone = max(int(scheme.first_fault(member)), 0)
+        x = member.x
         raise SimulationError(
-            f"non-physical state (NaN, tangled zone or non-positive internal energy) in member {k} after "
+            f"non-physical state (NaN, tangled zone or non-positive internal energy) in member {k} at "
             f"t = {float(state.t[k]):.9g} s, step {int(state.step[k])}: zone {zone} at x = "
             f"{0.5 * (x[zone] + x[zone + 1]):.6g} m; {where}")
     if np.any(np.asarray(state.step) >= sc.time.max_steps):

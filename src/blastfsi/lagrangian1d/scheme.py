@@ -71,7 +71,7 @@ class State(NamedTuple):
     face_impulse: jnp.ndarray  # int (p_{N-1/2} - p_right) dt on the right end
     peak_face_overpressure: jnp.ndarray
     boundary_work: jnp.ndarray  # work done on the system by the boundaries
-    fault: jnp.ndarray  # -1 while healthy, else index of the first bad zone
+    faulted: jnp.ndarray  # True once the state is non-physical (see first_fault for where)
     hist: jnp.ndarray  # (n_samples, N_HIST) histories sampled in compiled code
     hist_next: jnp.ndarray  # index of the next history sample to record
 
@@ -102,9 +102,17 @@ def node_masses(zone_mass, right_mass):
     return m.at[-1].add(right_mass)
 
 
-def stable_dt(dx, e, v, num: Numerics):
-    """002 Eq. (20) with the viscous signal speed (see module docstring)."""
-    a = jnp.sqrt(num.gamma * (num.gamma - 1.0) * e)
+def sound_speed(e, gamma):
+    """002 Eq. (13), ERRATA 002-3."""
+    return jnp.sqrt(gamma * (gamma - 1.0) * e)
+
+
+def stable_dt(dx, a, v, num: Numerics):
+    """002 Eq. (20) with the viscous signal speed (see module docstring).
+
+    NaN (NaN or negative energy somewhere) or <= 0 (a tangled zone) exactly when
+    the state is non-physical, so the time-step reduction doubles as the fault check.
+    """
     dv = v[1:] - v[:-1]
     s = jnp.where(dv < 0.0, 2.0 * (num.K1**2 * jnp.abs(dv) + num.K2 * a), 0.0)
     return num.cfl * jnp.min(dx / (s + jnp.sqrt(s * s + a * a)))
@@ -127,14 +135,16 @@ def total_energy(state: State, bc: Boundaries):
     return jnp.sum(state.zone_mass * state.e) + 0.5 * jnp.sum(nm * state.v**2)
 
 
-def vnr_step(s: State, dt, num: Numerics, bc: Boundaries, left_velocity_set: bool, right_fixed: bool):
-    """Advance one time step dt = dt_{j+1} (002 Sec. 2 sequence). Pure."""
+def vnr_step(s: State, dt, a, node_mass, num: Numerics, bc: Boundaries, left_velocity_set: bool,
+             right_fixed: bool):
+    """Advance one time step dt = dt_{j+1} (002 Sec. 2 sequence); ``a`` the zone
+    sound speeds at t_j, ``node_mass`` from :func:`node_masses`. Pure."""
     gamma = num.gamma
     dx = s.x[1:] - s.x[:-1]
     p = zone_pressure(s.zone_mass, s.x, s.e, s.q, gamma)
     p_left = p[0] if left_velocity_set else bc.left_pressure
     p_ext = jnp.concatenate([jnp.reshape(p_left, (1,)), p, jnp.reshape(bc.right_pressure, (1,))])
-    acc = (p_ext[:-1] - p_ext[1:]) / node_masses(s.zone_mass, bc.right_mass)  # Eq. (10), Eq. (23)
+    acc = (p_ext[:-1] - p_ext[1:]) / node_mass  # Eq. (10), Eq. (23)
     v = s.v + 0.5 * (s.dt_prev + dt) * acc  # Eq. (9), ERRATA 002-2
     if left_velocity_set:
         v = v.at[0].set(bc.left_velocity)
@@ -145,7 +155,6 @@ def vnr_step(s: State, dt, num: Numerics, bc: Boundaries, left_velocity_set: boo
     dtD = 2.0 * (dx_new - dx) / (dx_new + dx)  # dt * Eq. (14)
     dx_mid = 0.5 * (dx + dx_new)  # Eq. (15)
     rho_mid = 0.5 * s.zone_mass * (1.0 / dx_new + 1.0 / dx)  # Eq. (17)
-    a = jnp.sqrt(gamma * (gamma - 1.0) * s.e)  # Eq. (13)
     q = viscous_pressure(rho_mid, dx_mid, dtD / dt, a, num)
     e = implicit_energy(s.e, q, rho_mid, dtD, gamma)
     work = dt * (p_left * v[0] - bc.right_pressure * v[-1])
@@ -160,10 +169,11 @@ def vnr_step(s: State, dt, num: Numerics, bc: Boundaries, left_velocity_set: boo
 
 def first_fault(s: State):
     """Index of the first zone with a non-physical state (NaN, tangled zone,
-    non-positive internal energy), or -1 when the state is healthy."""
+    non-positive internal energy), or -1 when the state is healthy. Works on
+    NumPy and JAX arrays (the driver calls it on the host after a fault)."""
     dx = s.x[1:] - s.x[:-1]
     bad = ~(jnp.isfinite(dx) & (dx > 0.0) & jnp.isfinite(s.e) & (s.e > 0.0) & jnp.isfinite(s.v[1:]))
-    return jnp.where(jnp.any(bad), jnp.argmax(bad), -1)
+    return jnp.where(jnp.any(bad), jnp.argmax(bad), -1).astype(jnp.int32)
 
 
 def history_row(s: State, bc: Boundaries, e0, x_right0, right_fixed: bool, gamma):
@@ -185,7 +195,7 @@ def initial_state(x, v, e, zone_mass, n_samples: int) -> State:
         x=x, v=jnp.asarray(v), e=jnp.asarray(e), q=z, zone_mass=jnp.asarray(zone_mass),
         t=zero, dt_prev=zero, step=jnp.zeros((), jnp.int32), face_impulse=zero,
         peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
-        fault=jnp.asarray(-1, jnp.int32), hist=jnp.full((n_samples, N_HIST), jnp.nan, x.dtype),
+        faulted=jnp.asarray(False), hist=jnp.full((n_samples, N_HIST), jnp.nan, x.dtype),
         hist_next=jnp.zeros((), jnp.int32),
     )
 
@@ -195,37 +205,40 @@ def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0,
     """Advance in compiled code until t_stop, max_steps more steps, or a fault.
 
     Steps are shortened to land exactly on t_stop and on every history sample
-    time k * sample_interval, where the history row k is recorded. A step that
-    produces a non-physical state is discarded and ``fault`` set, so the
-    returned state is the last healthy one.
+    time k * sample_interval, where history row k is recorded. A
+    non-physical state (detected by the time-step reduction) sets ``faulted``
+    and ends the loop without stepping; the state returned is that state, for
+    :func:`first_fault` to locate (the last checkpoint on disk stays usable).
     """
     n_samples = s.hist.shape[0]
     step_limit = s.step + max_steps
-
-    def record(st):
-        row = history_row(st, bc, e0, x_right0, right_fixed, num.gamma)
-        k = jnp.minimum(st.hist_next, n_samples - 1)
-        return st._replace(hist=st.hist.at[k].set(row), hist_next=st.hist_next + 1)
+    node_mass = node_masses(s.zone_mass, bc.right_mass)
 
     def next_sample_time(st):
         return jnp.where(st.hist_next < n_samples, st.hist_next * sample_interval, jnp.inf)
 
-    s = jax.lax.cond((s.hist_next == 0) & (s.step == 0), record, lambda st: st, s)
+    def record_if(st, due):
+        k = jnp.minimum(st.hist_next, n_samples - 1)
+        row = jax.lax.cond(due, lambda: history_row(st, bc, e0, x_right0, right_fixed, num.gamma), lambda: st.hist[k])
+        return st._replace(hist=st.hist.at[k].set(row), hist_next=st.hist_next + due.astype(st.hist_next.dtype))
+
+    s = record_if(s, (s.hist_next == 0) & (s.step == 0))
 
     def cond(st):
-        return (st.t < t_stop) & (st.step < step_limit) & (st.fault < 0)
+        return (st.t < t_stop) & (st.step < step_limit) & ~st.faulted
 
     def body(st):
-        dx = st.x[1:] - st.x[:-1]
-        target = jnp.minimum(t_stop, next_sample_time(st))
-        dt_cfl = stable_dt(dx, st.e, st.v, num)
-        lands = st.t + dt_cfl >= target
-        dt = jnp.where(lands, target - st.t, dt_cfl)
-        new = vnr_step(st, dt, num, bc, left_velocity_set, right_fixed)
-        new = new._replace(t=jnp.where(lands, target, new.t))
-        fault = first_fault(new)
-        new = jax.lax.cond(lands & (target == next_sample_time(st)), record, lambda z: z, new)
-        return jax.tree_util.tree_map(lambda good, old: jnp.where(fault >= 0, old, good), new, st)._replace(
-            fault=fault.astype(jnp.int32))
+        a = sound_speed(st.e, num.gamma)
+        dt_cfl = stable_dt(st.x[1:] - st.x[:-1], a, st.v, num)
+
+        def go(st):
+            target = jnp.minimum(t_stop, next_sample_time(st))
+            lands = st.t + dt_cfl >= target
+            dt = jnp.where(lands, target - st.t, dt_cfl)
+            new = vnr_step(st, dt, a, node_mass, num, bc, left_velocity_set, right_fixed)
+            due = lands & (target == next_sample_time(st))
+            return record_if(new._replace(t=jnp.where(lands, target, new.t)), due)
+
+        return jax.lax.cond(dt_cfl > 0.0, go, lambda st: st._replace(faulted=jnp.asarray(True)), st)
 
     return jax.lax.while_loop(cond, body, s)
