@@ -122,3 +122,12 @@ def test_float32_run_keeps_precision_and_accuracy():
     res = wall_run(4.49, numerics={"precision": "float32"})
     assert res.state.x.dtype == jnp.float32 and res.state.hist.dtype == jnp.float32
     assert res.summary["reflection_coefficient"] == pytest.approx(shock.reflection_coefficient(4.49 * P0, P0), rel=1e-2)
+
+
+def test_free_end_expands_to_the_free_surface_velocity():
+    # plate.areal_mass = 0: the end node is a free surface held at p0; after the
+    # shock arrives it leaves at u_fs (isentropic expansion to p0, docs/theory.md)
+    ps = 4.49 * P0
+    res = simulation.run(uniform_data(plate__beta_s=None, plate__areal_mass=0.0, grid__cells=800, output__fields=0))
+    assert res.summary["beta_s"] is None and res.summary["plate_impulse"] == 0.0
+    assert res.summary["plate_velocity"] == pytest.approx(float(shock.free_surface_velocity(ps, P0, RHO0)), rel=1e-2)

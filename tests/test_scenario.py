@@ -11,7 +11,8 @@ from conftest import uniform_data
 
 # (override, expected fragments of the message)
 MALFORMED = [
-    ({"plate__beta_s": None, "plate__areal_mass": -3.0}, ["plate.areal_mass", "> 0"]),
+    ({"plate__beta_s": None, "plate__areal_mass": -3.0}, ["plate.areal_mass", ">= 0"]),
+    ({"plate__beta_s": -1.0}, ["plate.beta_s", "> 0"]),
     ({"grid__cells": 0}, ["grid.cells", ">= 10"]),
     ({"grid__colls": 5}, ["grid.colls", "unknown key"]),
     ({"grid__cells": "many"}, ["grid.cells", "integer"]),

@@ -68,7 +68,8 @@ class Plate(_Strict):
     """
 
     fixed: bool = False
-    areal_mass: Optional[float] = Field(None, gt=0.0, description="rho_p h_p [kg/m^2]")
+    areal_mass: Optional[float] = Field(None, ge=0.0, description=(
+        "rho_p h_p [kg/m^2]; 0 makes the end a free surface held at back_pressure"))
     beta_s: Optional[float] = Field(None, gt=0.0, description="compressible FSI parameter, Eq. (28) [-]")
     density: Optional[float] = Field(None, gt=0.0, description="plate density rho_p [kg/m^3]")
     thickness: Optional[float] = Field(None, gt=0.0, description="plate thickness h_p [m]")

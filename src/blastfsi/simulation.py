@@ -16,6 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from blastfsi.eos import ideal_gas
 from blastfsi.io import results
 from blastfsi.lagrangian1d import scheme
 from blastfsi.problems import plate1d
@@ -89,7 +90,7 @@ def _fields_of(state: scheme.State, k: int, gamma: float) -> dict:
     e = np.asarray(state.e[k])
     q = np.asarray(state.q[k])
     rho = m / np.diff(x)
-    return {"x": x, "velocity": np.asarray(state.v[k]), "density": rho, "pressure": (gamma - 1.0) * rho * e + q,
+    return {"x": x, "velocity": np.asarray(state.v[k]), "density": rho, "pressure": ideal_gas.pressure(rho, e, gamma) + q,
             "internal_energy": e, "viscous_pressure": q}
 
 

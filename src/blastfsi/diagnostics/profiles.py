@@ -2,13 +2,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from blastfsi.eos import ideal_gas
+
 
 def zone_profile(state, member: int, gamma: float):
     """Zone centres, zone widths and pressures (including q) of one ensemble member."""
     x = np.asarray(state.x[member])
     dx = np.diff(x)
     rho = np.asarray(state.zone_mass[member]) / dx
-    return 0.5 * (x[1:] + x[:-1]), dx, (gamma - 1.0) * rho * np.asarray(state.e[member]) + np.asarray(state.q[member])
+    return 0.5 * (x[1:] + x[:-1]), dx, ideal_gas.pressure(rho, np.asarray(state.e[member]), gamma) + np.asarray(
+        state.q[member])
 
 
 def front_position(xc, p, level: float) -> float:

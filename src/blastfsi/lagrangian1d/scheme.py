@@ -33,6 +33,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from blastfsi.eos import ideal_gas
+
 
 class Numerics(NamedTuple):
     """Scheme parameters (traced, so an ensemble may vary them)."""
@@ -91,7 +93,7 @@ N_HIST = len(HISTORY_COLUMNS)
 
 def zone_pressure(zone_mass, x, e, q, gamma):
     """002 Eq. (11) (with q = -Q): p = (gamma-1) rho e + q, rho = m / dx."""
-    return (gamma - 1.0) * zone_mass / (x[1:] - x[:-1]) * e + q
+    return ideal_gas.pressure(zone_mass / (x[1:] - x[:-1]), e, gamma) + q
 
 
 def node_masses(zone_mass, right_mass):
@@ -100,11 +102,6 @@ def node_masses(zone_mass, right_mass):
     half = 0.5 * zone_mass
     m = jnp.concatenate([half[:1], half[1:] + half[:-1], half[-1:]])
     return m.at[-1].add(right_mass)
-
-
-def sound_speed(e, gamma):
-    """002 Eq. (13), ERRATA 002-3."""
-    return jnp.sqrt(gamma * (gamma - 1.0) * e)
 
 
 def stable_dt(dx, a, v, num: Numerics):
@@ -228,7 +225,7 @@ def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0,
         return (st.t < t_stop) & (st.step < step_limit) & ~st.faulted
 
     def body(st):
-        a = sound_speed(st.e, num.gamma)
+        a = ideal_gas.sound_speed(st.e, num.gamma)  # Eq. (13)
         dt_cfl = stable_dt(st.x[1:] - st.x[:-1], a, st.v, num)
 
         def go(st):

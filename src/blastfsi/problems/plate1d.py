@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from blastfsi.eos import ideal_gas
 from blastfsi.exact import shock
 from blastfsi.exact.sedov import PlanarSedov
 from blastfsi.scenario import Scenario, ScenarioError
@@ -67,7 +68,7 @@ def _theory(sc: Scenario, ps: float, duration, plate_mass: float) -> dict:
     }
     if g.gamma == 1.4:
         info["f_R_eq30"] = float(shock.f_R_eq30(ps, g.pressure))
-    if duration is not None:
+    if duration is not None and (sc.plate.fixed or plate_mass > 0):  # a free end (mass 0) has no beta_s
         if sc.plate.fixed:
             info["beta_s"] = 0.0
         else:
@@ -118,7 +119,7 @@ def build_uniform(sc: Scenario) -> Setup:
     info = _theory(sc, inc.overpressure, duration, mass)
     info.update(arrival_time=arrival, clean_duration=clean_window(sc, inc.overpressure), plate_areal_mass=mass)
     return Setup(
-        x=x, v=v, e=np.full(dx.shape, g.pressure / ((g.gamma - 1.0) * g.density)), zone_mass=g.density * dx,
+        x=x, v=v, e=np.full(dx.shape, ideal_gas.energy(g.density, g.pressure, g.gamma)), zone_mass=g.density * dx,
         numerics=_numerics(sc), boundaries=(float(s.particle_velocity), g.pressure, mass, _back(sc)),
         left_velocity_set=True, right_fixed=sc.plate.fixed, info=info,
     )
@@ -153,7 +154,7 @@ def build_exponential(sc: Scenario) -> Setup:
     info = _theory(sc, inc.overpressure, duration, mass)
     info.update(arrival_time=inc.standoff / float(nominal.shock_speed), plate_areal_mass=mass, nominal=True)
     return Setup(
-        x=x, v=np.asarray(v, float), e=p_abs / ((g.gamma - 1.0) * zs.density), zone_mass=zs.density * dx,
+        x=x, v=np.asarray(v, float), e=ideal_gas.energy(zs.density, p_abs, g.gamma), zone_mass=zs.density * dx,
         numerics=_numerics(sc), boundaries=(0.0, float(p_abs[0]), mass, _back(sc)),
         left_velocity_set=False, right_fixed=sc.plate.fixed, info=info,
     )
