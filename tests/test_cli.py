@@ -4,7 +4,9 @@ import subprocess
 import sys
 
 import h5py
+import meshio
 import numpy as np
+import pytest
 
 from blastfsi.io.results import read_history
 
@@ -42,6 +44,16 @@ def test_run_example_json_and_results_directory(tmp_path):
         x = f["member0/coordinates"][:, 0]
         assert x.size == 301 and np.all(np.diff(x) > 0)
         assert f["member0/pressure"].shape == (300,)
+    # ParaView's XDMF index, read by meshio: the time series and the zone fields
+    series = meshio.xdmf.TimeSeriesReader(str(out / "fields" / "member0.xdmf"))
+    points, cells = series.read_points_cells()
+    assert points.shape == (301, 3) and cells[0].type == "line" and len(cells[0].data) == 300
+    assert series.num_steps == 11
+    t, point_data, cell_data = series.read_data(10)
+    assert t == pytest.approx(0.0016, rel=1e-15)
+    with h5py.File(out / "fields" / "snap_0010.h5", "r") as f:
+        np.testing.assert_array_equal(cell_data["pressure"][0], f["member0/pressure"][()])
+        np.testing.assert_array_equal(point_data["velocity"], f["member0/velocity"][()])
     # a second run into the same directory is refused (exit 4), nothing overwritten
     again = cli("run", "--example", "plate1d-uniform", "--out", str(out))
     assert again.returncode == 4 and "exists" in again.stderr
@@ -54,3 +66,22 @@ def test_default_results_directory_is_never_reused(tmp_path):
     assert cli(*args, cwd=tmp_path).returncode == 0
     assert (tmp_path / "results" / "plate1d-uniform" / "summary.json").is_file()
     assert (tmp_path / "results" / "plate1d-uniform-2" / "summary.json").is_file()
+
+
+def test_exponential_and_sedov_examples_run(tmp_path):
+    proc = cli("run", "--example", "plate1d-exponential", "--set", "grid.cells=600", "--set", "time.end=0.006",
+               "--set", "output.fields=0", "--set", "output.plots=false", "--out", str(tmp_path / "e"), "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["plate_impulse"] > 0
+    # the sedov example is an ensemble (2 mm and 20 mm plates): each key holds one value per member
+    proc = cli("run", "--example", "plate1d-sedov", "--set", "grid.cells=640", "--set", "time.end=0.004",
+               "--set", "output.fields=2", "--set", "output.plots=false", "--out", str(tmp_path / "s"), "--json")
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)
+    assert SUMMARY_KEYS <= summary.keys() and len(summary["plate_velocity"]) == 2
+    light, heavy = summary["plate_velocity"]
+    assert light > heavy > 0  # same loading, 10x the mass
+    assert summary["peak_overpressure"][0] == pytest.approx(summary["peak_overpressure"][1], rel=0.05)
+    for k in (0, 1):
+        assert read_history(tmp_path / "s" / f"history_member{k}.csv")["time"][-1] == 0.004
+        assert (tmp_path / "s" / "fields" / f"member{k}.xdmf").is_file()

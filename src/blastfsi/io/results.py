@@ -95,7 +95,7 @@ def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node
             for names, center, n in ((node_fields, "Node", n_nodes), (zone_fields, "Cell", n_zones))
             for name in names)
         grids.append(
-            f'<Grid Name="t{index}" GridType="Uniform"><Time Value="{time!r}"/>'
+            f'<Grid Name="t{index}" GridType="Uniform"><Time Value="{float(time)!r}"/>'
             f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{n_zones}">'
             f'<DataItem Dimensions="{n_zones} 2" NumberType="Int" Precision="8" Format="HDF">{h5}/connectivity'
             f'</DataItem></Topology><Geometry GeometryType="XYZ"><DataItem Dimensions="{n_nodes} 3" '
