@@ -6,6 +6,7 @@ SI (m, kg, s, Pa, J).
 """
 from __future__ import annotations
 
+import copy
 import itertools
 import tomllib
 from pathlib import Path
@@ -219,38 +220,29 @@ def parse_value(text: str):
         return text
 
 
-def apply_overrides(data: dict, overrides: list[str]) -> dict:
-    """Apply ``key.path=value`` overrides to a raw scenario dict (validated later with the rest)."""
-    out = _deep_copy(data)
-    for item in overrides:
-        if "=" not in item:
-            raise ScenarioError(f"--set expects key.path=value, got {item!r}")
-        key, text = item.split("=", 1)
-        parts = key.strip().split(".")
-        if not all(parts):
-            raise ScenarioError(f"--set key {key!r} is not a dotted key path")
-        node = out
-        for p in parts[:-1]:
-            child = node.setdefault(p, {})
-            if not isinstance(child, dict):
-                raise ScenarioError(f"--set {key}: {p!r} is a value, not a table")
-            node = child
-        node[parts[-1]] = parse_value(text.strip())
-    return out
-
-
-def _set(data: dict, key: str, value) -> dict:
-    out = _deep_copy(data)
+def set_dotted(data: dict, key: str, value) -> dict:
+    """A copy of ``data`` with ``value`` at the dotted ``key`` (tables created as needed)."""
+    parts = key.strip().split(".")
+    if not all(parts):
+        raise ScenarioError(f"key {key!r} is not a dotted key path")
+    out = copy.deepcopy(data)
     node = out
-    parts = key.split(".")
     for p in parts[:-1]:
         node = node.setdefault(p, {})
+        if not isinstance(node, dict):
+            raise ScenarioError(f"{key}: {p!r} is a value, not a table")
     node[parts[-1]] = value
     return out
 
 
-def _deep_copy(d):
-    return {k: _deep_copy(v) if isinstance(v, dict) else (list(v) if isinstance(v, list) else v) for k, v in d.items()}
+def apply_overrides(data: dict, overrides: list[str]) -> dict:
+    """Apply ``--set key.path=value`` overrides to a raw scenario dict (validated later with the rest)."""
+    for item in overrides:
+        if "=" not in item:
+            raise ScenarioError(f"--set expects key.path=value, got {item!r}")
+        key, text = item.split("=", 1)
+        data = set_dotted(data, key, parse_value(text.strip()))
+    return data
 
 
 def read_toml(path: str | Path) -> dict:
@@ -266,12 +258,12 @@ def read_toml(path: str | Path) -> dict:
 
 def member_scenario(data: dict, member: dict) -> Scenario:
     """One ensemble member as a plain (sweep-free) validated scenario."""
-    d = _deep_copy(data)
+    d = copy.deepcopy(data)
     d.pop("sweep", None)
     plate = d.setdefault("plate", {})
     if any(k in member for k in ("plate.areal_mass", "plate.beta_s")):
         for k in ("areal_mass", "beta_s", "density", "thickness"):
             plate.pop(k, None)
     for key, value in member.items():
-        d = _set(d, key, value)
+        d = set_dotted(d, key, value)
     return parse(d)

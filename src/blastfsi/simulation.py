@@ -42,8 +42,8 @@ class RunResult:
         """One member: its summary; an ensemble: each key maps to the list over members."""
         if len(self.summaries) == 1:
             return dict(self.summaries[0])
-        keys = self.summaries[0].keys()
-        out = {k: [s[k] for s in self.summaries] for k in keys}
+        keys = dict.fromkeys(k for s in self.summaries for k in s)  # union, in order
+        out = {k: [s.get(k) for s in self.summaries] for k in keys}
         out["members"] = self.members
         return out
 
@@ -135,7 +135,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         last_ckpt = results.latest_checkpoint(out)
         if last_ckpt is None:
             raise results.OutputError(f"--restart: no checkpoint in {out / 'checkpoints'}")
-        leaves, meta = results.read_checkpoint(last_ckpt)
+        leaves, _ = results.read_checkpoint(last_ckpt)
         state = scheme.State(**{k: jnp.asarray(leaves[k]) for k in scheme.State._fields})
         e0 = jnp.asarray(leaves["energy0"])
     elif out is not None:
@@ -144,7 +144,6 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     snapshots = results.list_snapshots(out) if restart else []
     t_start = float(np.min(np.asarray(state.t)))
     snapshots = [s for s in snapshots if s[1] <= t_start]
-    ckpt_index = int(last_ckpt.stem.split("_")[1]) if last_ckpt else 0
 
     bar = _Progress(sc.time.end, enabled=progress)
     started = wallclock.perf_counter()
@@ -175,7 +174,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     wall = wallclock.perf_counter() - started
 
     histories = [_history_dict(np.asarray(state.hist[k])) for k in range(len(setups))]
-    summaries = [_summary(sc, setups[k], histories[k], state, bc, k, wall) for k in range(len(setups))]
+    energies = np.asarray(jax.vmap(scheme.total_energy)(state, bc))
+    summaries = [_summary(sc, setups[k], histories[k], state, float(energies[k]), k, wall) for k in range(len(setups))]
     result = RunResult(sc, members, setups, summaries, histories, state, out)
     if out is not None:
         _write_outputs(out, result, snapshots)
@@ -203,10 +203,9 @@ def _check(state: scheme.State, sc: Scenario, last_ckpt) -> None:
                               f"(end {sc.time.end} s); raise time.max_steps or coarsen grid.cells; {where}")
 
 
-def _summary(sc: Scenario, setup: plate1d.Setup, hist: dict, state, bc, k: int, wall: float) -> dict:
+def _summary(sc: Scenario, setup: plate1d.Setup, hist: dict, state, energy: float, k: int, wall: float) -> dict:
     info = setup.info
     fixed = sc.plate.fixed
-    energy = float(jax.vmap(scheme.total_energy)(state, bc)[k])
     v_plate = 0.0 if fixed else float(state.v[k, -1])
     impulse = float(state.face_impulse[k]) if fixed else float(state.v[k, -1]) * info["plate_areal_mass"]
     cr_theory = info.get("reflection_coefficient_theory")
