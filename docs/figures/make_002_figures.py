@@ -117,10 +117,12 @@ def light(cells=5000, length=8.0, ti=1e-3):
     assert ti < length * clean
     res = simulation.run([uniform(r, length, cells, end, {"beta_s": b}) for b in betas])
     ufs = float(shock.free_surface_velocity(r * P0, P0, RHO0))
-    paper = [1006.5, 1005.6, 1005.5]
-    dump("light_plate", {"cells": cells, "t_i": ti, "free_surface_velocity": ufs,
-                         "f_R_eq30_velocity": float(shock.f_R_eq30(r * P0, P0) * res.summaries[0]["reflection_coefficient_theory"] * r * P0
-                                                    / (shock.incident_shock(r * P0, P0, RHO0).density * shock.incident_shock(r * P0, P0, RHO0).shock_speed)),
+    s0 = shock.incident_shock(r * P0, P0, RHO0)
+    # plate velocity implied by the printed Eq. (30): u = f_R C_R p_s / (rho_s U_s)
+    u_eq30 = float(shock.f_R_eq30(r * P0, P0) * shock.reflection_coefficient(r * P0, P0) * r * P0
+                   / (s0.density * s0.shock_speed))
+    paper = [1006.5, 1005.6, 1005.5]  # 002 Sec. 3.2
+    dump("light_plate", {"cells": cells, "t_i": ti, "free_surface_velocity": ufs, "f_R_eq30_velocity": u_eq30,
                          "rows": [{"beta_s": b, "u_p_sim": s["plate_velocity"], "u_p_paper": p,
                                    "sim_over_free_surface": s["plate_velocity"] / ufs}
                                   for b, s, p in zip(betas, res.summaries, paper)]})
@@ -162,8 +164,9 @@ def sedov(cells=10000, length=100.0):
     for ax, lab in zip(axes, ("plate overpressure [MPa]", "displacement [m]", "velocity [m/s]")):
         ax.set_xlabel("t [ms] (from front at 22.5 m)"), ax.set_ylabel(lab), ax.grid(alpha=0.3), ax.legend()
     fig.tight_layout(), fig.savefig(HERE / "sedov_plates.png", dpi=130)
-    payload["plates"] = [{"thickness": m["plate.thickness"], **{k: s[k] for k in (
-        "plate_velocity", "plate_displacement", "plate_impulse", "peak_overpressure")}} for m, s in zip(ex.members, ex.summaries)]
+    keys = ("plate_velocity", "plate_displacement", "plate_impulse", "peak_overpressure")
+    payload["plates"] = [{"thickness": m["plate.thickness"], **{k: s[k] for k in keys}}
+                         for m, s in zip(ex.members, ex.summaries)]
     dump("sedov", payload)
 
 

@@ -160,11 +160,13 @@ class Scenario(_Strict):
                 raise ValueError("sweep.beta_s is defined for uniform shocks only")
             if self.sweep.thickness is not None and self.plate.density is None:
                 raise ValueError("sweep.thickness needs plate.density")
-            if self.plate.fixed and any(getattr(self.sweep, n) is not None for n in ("beta_s", "areal_mass", "thickness")):
+            mass_sweep = any(getattr(self.sweep, n) is not None for n in ("beta_s", "areal_mass", "thickness"))
+            if self.plate.fixed and mass_sweep:
                 raise ValueError("a plate-mass sweep needs plate.fixed = false")
         if inc.profile == "exponential":
             if inc.standoff >= self.domain.length:
-                raise ValueError(f"incident.standoff ({inc.standoff} m) must be < domain.length ({self.domain.length} m)")
+                raise ValueError(f"incident.standoff ({inc.standoff} m) must be < domain.length "
+                                 f"({self.domain.length} m)")
             dx = self.domain.length / self.grid.cells
             if inc.ramp_cells * dx >= self.domain.length - inc.standoff:
                 raise ValueError("incident.ramp_cells span more than the gas behind the front")
@@ -187,7 +189,8 @@ class Scenario(_Strict):
 def _format_errors(err: ValidationError) -> str:
     lines = []
     for e in err.errors():
-        loc = ".".join(str(p) for p in e["loc"] if not (isinstance(p, str) and p in ("uniform", "exponential", "sedov")))
+        # drop the discriminator tags pydantic inserts in union locations
+        loc = ".".join(str(p) for p in e["loc"] if p not in ("uniform", "exponential", "sedov"))
         msg = e["msg"]
         if e["type"] == "extra_forbidden":
             msg = "unknown key"

@@ -90,8 +90,8 @@ def _fields_of(state: scheme.State, k: int, gamma: float) -> dict:
     e = np.asarray(state.e[k])
     q = np.asarray(state.q[k])
     rho = m / np.diff(x)
-    return {"x": x, "velocity": np.asarray(state.v[k]), "density": rho, "pressure": ideal_gas.pressure(rho, e, gamma) + q,
-            "internal_energy": e, "viscous_pressure": q}
+    return {"x": x, "velocity": np.asarray(state.v[k]), "density": rho,
+            "pressure": ideal_gas.pressure(rho, e, gamma) + q, "internal_energy": e, "viscous_pressure": q}
 
 
 NODE_FIELDS = ("velocity",)
