@@ -11,6 +11,8 @@ from blastfsi.io.results import read_checkpoint
 from blastfsi.lagrangian1d import scheme
 from conftest import P0, RHO0, uniform_data
 
+NO_GAUGES = scheme.Gauges(jnp.zeros((0,)), jnp.asarray(P0))
+
 
 def wall_run(ratio, cells=400, length=2.0, **over):
     """Uniform shock on a rigid wall, run for the clean window after arrival."""
@@ -49,7 +51,7 @@ def test_gas_at_rest_stays_at_rest():
     st = scheme.initial_state(x, jnp.zeros(n + 1), jnp.full(n, P0 / (0.4 * RHO0)), jnp.full(n, RHO0 / n), 4)
     num = scheme.Numerics(*map(jnp.asarray, (1.4, 1.5, 0.1, 0.5)))
     bc = scheme.Boundaries(*map(jnp.asarray, (0.0, P0, 0.0, P0)))
-    out = scheme.advance(st, 1e-3, 10_000, 1e-3 / 3, 0.0, 1.0, num, bc, True, False)
+    out = scheme.advance(st, 1e-3, 10_000, 1e-3 / 3, 0.0, 1.0, num, bc, NO_GAUGES, True, False)
     assert int(out.step) > 10  # at rest up to round-off of the unequal linspace spacings
     np.testing.assert_allclose(np.asarray(out.x), np.asarray(x), rtol=0, atol=1e-14)
     np.testing.assert_allclose(np.asarray(out.e), np.asarray(st.e), rtol=1e-13)
@@ -68,7 +70,7 @@ def test_first_fault_locates_the_bad_zone():
     num = scheme.Numerics(*map(jnp.asarray, (1.4, 1.5, 0.1, 0.5)))
     bc = scheme.Boundaries(*map(jnp.asarray, (0.0, P0, 0.0, P0)))
     for bad in (st._replace(e=st.e.at[7].set(-1.0)), st._replace(x=st.x.at[12].set(0.5))):
-        out = scheme.advance(bad, 1e-3, 100, 1e-3 / 3, 0.0, 1.0, num, bc, True, False)
+        out = scheme.advance(bad, 1e-3, 100, 1e-3 / 3, 0.0, 1.0, num, bc, NO_GAUGES, True, False)
         assert bool(out.faulted) and int(out.step) == 0
 
 
@@ -139,3 +141,23 @@ def test_free_end_expands_to_the_free_surface_velocity():
     res = simulation.run(uniform_data(plate__beta_s=None, plate__areal_mass=0.0, grid__cells=800, output__fields=0))
     assert res.summary["beta_s"] is None and res.summary["plate_impulse"] == 0.0
     assert res.summary["plate_velocity"] == pytest.approx(float(shock.free_surface_velocity(ps, P0, RHO0)), rel=1e-2)
+
+
+def test_gauges_see_the_incident_shock_and_its_impulse():
+    # Gauges at 1.5 m and 1.8 m of a 2 m column: the uniform incident shock passes with
+    # overpressure p_s (jump conditions) and arrival x/U_s; before the reflected
+    # wave returns the positive impulse is p_s (t - x/U_s).
+    ps = 4.49 * P0
+    s = shock.incident_shock(ps, P0, RHO0)
+    t_end = 2.0 / s.shock_speed + 1e-5  # just after arrival at the wall: no reflection back at the gauges
+    res = simulation.run(uniform_data(plate__beta_s=None, plate__fixed=True, grid__cells=800, time__end=t_end,
+                                      output__fields=0, output__gauges=[1.5, 1.8, 2.5]))
+    summ, hist = res.summary, res.histories[0]
+    assert np.all(np.isnan(hist["gauge2_overpressure"]))  # beyond the wall: outside the gas
+    assert summ["gauge_peak_overpressure"][2] is None and summ["gauge_impulse"][2] == 0.0
+    for k, x in enumerate((1.5, 1.8)):
+        late = hist["time"] > x / s.shock_speed + 2e-4
+        np.testing.assert_allclose(hist[f"gauge{k}_overpressure"][late], ps, rtol=2e-3)
+        # smeared shock of ~3 zones shifts the impulse by ~ 3 dx / U_s * p_s / 2
+        assert summ["gauge_impulse"][k] == pytest.approx(ps * (t_end - x / s.shock_speed), rel=0.02)
+        assert summ["gauge_peak_overpressure"][k] == pytest.approx(ps, rel=0.05)

@@ -116,6 +116,9 @@ class Output(_Strict):
     history_samples: int = Field(1001, ge=2, le=1_000_000, description="samples of the histories over [0, end]")
     fields: int = Field(11, ge=0, le=10_000, description="field snapshots over [0, end] (0: none)")
     checkpoint_interval: Optional[float] = Field(None, gt=0.0, description="simulated time between checkpoints [s]")
+    gauges: list[Annotated[float, Field(ge=0.0)]] = Field(
+        default_factory=list, max_length=100,
+        description="positions of pressure gauges fixed in space [m]: overpressure history, peak, positive impulse")
     plots: bool = True
 
 

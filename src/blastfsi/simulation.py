@@ -51,20 +51,20 @@ class RunResult:
 @functools.lru_cache(maxsize=None)
 def batched_advance(left_velocity_set: bool, right_fixed: bool):
     """jit(vmap(advance)) for one boundary configuration; compiled once per shapes."""
-    def one(state, t_stop, max_steps, sample_interval, e0, x_right0, num, bc):
-        return scheme.advance(state, t_stop, max_steps, sample_interval, e0, x_right0, num, bc,
+    def one(state, t_stop, max_steps, sample_interval, e0, x_right0, num, bc, gauges):
+        return scheme.advance(state, t_stop, max_steps, sample_interval, e0, x_right0, num, bc, gauges,
                               left_velocity_set, right_fixed)
 
-    vm = jax.vmap(one, in_axes=(0, None, None, None, 0, 0, 0, 0))
+    vm = jax.vmap(one, in_axes=(0, None, None, None, 0, 0, 0, 0, None))
     return jax.jit(vm, donate_argnums=(0,))
 
 
-def _stack(setups: list[plate1d.Setup], n_samples: int, dtype):
+def _stack(setups: list[plate1d.Setup], n_samples: int, n_gauges: int, dtype):
     def arr(values):
         return jnp.asarray(np.stack(values), dtype=dtype)
 
     states = [scheme.initial_state(jnp.asarray(s.x, dtype), jnp.asarray(s.v, dtype), jnp.asarray(s.e, dtype),
-                                   jnp.asarray(s.zone_mass, dtype), n_samples) for s in setups]
+                                   jnp.asarray(s.zone_mass, dtype), n_samples, n_gauges) for s in setups]
     state = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *states)
     num = scheme.Numerics(*[arr([s.numerics[i] for s in setups]) for i in range(4)])
     bc = scheme.Boundaries(*[arr([s.boundaries[i] for s in setups]) for i in range(4)])
@@ -127,7 +127,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     advance = batched_advance(*flags.pop())
     n_samples = sc.output.history_samples
     sample_interval = sc.time.end / (n_samples - 1)
-    state, num, bc, e0, x_right0 = _stack(setups, n_samples, dtype)
+    gauges = scheme.Gauges(jnp.asarray(sc.output.gauges, dtype).reshape(-1), jnp.asarray(sc.gas.pressure, dtype))
+    state, num, bc, e0, x_right0 = _stack(setups, n_samples, len(sc.output.gauges), dtype)
     field_times, ckpt_times, stops = stop_times(sc)
 
     last_ckpt = None
@@ -154,7 +155,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     try:
         for t_stop in (t for t in stops if t > t_start):
             while np.any(np.asarray(state.t) < t_stop):
-                state = advance(state, t_stop, chunk_steps, sample_interval, e0, x_right0, num, bc)
+                state = advance(state, t_stop, chunk_steps, sample_interval, e0, x_right0, num, bc, gauges)
                 _check(state, sc, last_ckpt)
                 bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
                            float(np.min(np.asarray(state.dt_prev))))
@@ -173,7 +174,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         bar.close()
     wall = wallclock.perf_counter() - started
 
-    histories = [_history_dict(np.asarray(state.hist[k])) for k in range(len(setups))]
+    columns = scheme.history_columns(len(sc.output.gauges))
+    histories = [_history_dict(np.asarray(state.hist[k]), columns) for k in range(len(setups))]
     energies = np.asarray(jax.vmap(scheme.total_energy)(state, bc))
     summaries = [_summary(sc, setups[k], histories[k], state, float(energies[k]), k, wall) for k in range(len(setups))]
     result = RunResult(sc, members, setups, summaries, histories, state, out)
@@ -182,9 +184,9 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     return result
 
 
-def _history_dict(rows: np.ndarray) -> dict:
+def _history_dict(rows: np.ndarray, columns) -> dict:
     rows = rows[np.isfinite(rows[:, 0])]
-    return {name: rows[:, i] for i, (name, _) in enumerate(scheme.HISTORY_COLUMNS)}
+    return {name: rows[:, i] for i, (name, _) in enumerate(columns)}
 
 
 def _check(state: scheme.State, sc: Scenario, last_ckpt) -> None:
@@ -215,7 +217,7 @@ def _summary(sc: Scenario, setup: plate1d.Setup, hist: dict, state, energy: floa
         "plate_displacement": float(state.x[k, -1] - setup.x[-1]),
         "plate_impulse": impulse,
         "plate_impulse_max": float(np.max(hist["plate_impulse"])),
-        "peak_overpressure": float(state.peak_face_overpressure[k]),
+        "peak_overpressure": _finite(state.peak_face_overpressure[k]),
         "beta_s": info.get("beta_s"),
         "reflection_coefficient_theory": cr_theory,
         "impulse_ratio_theory": info.get("impulse_ratio_theory"),
@@ -226,6 +228,10 @@ def _summary(sc: Scenario, setup: plate1d.Setup, hist: dict, state, energy: floa
         "wall_time": wall,
         "energy_error_relative": float(hist["energy_error"][-1]) / energy,
     }
+    if sc.output.gauges:
+        out["gauge_positions"] = list(sc.output.gauges)
+        out["gauge_peak_overpressure"] = [_finite(v) for v in np.asarray(state.gauge_peak[k])]
+        out["gauge_impulse"] = [_finite(v) for v in np.asarray(state.gauge_impulse[k])]
     if sc.incident.profile == "uniform":
         out["reflection_coefficient"] = _measured_reflection(hist, info)
         for key in ("arrival_time", "duration", "clean_duration", "f_R", "f_R_eq30", "free_surface_velocity"):
@@ -239,6 +245,12 @@ def _summary(sc: Scenario, setup: plate1d.Setup, hist: dict, state, energy: floa
     return out
 
 
+def _finite(value):
+    """A float for JSON; None where nothing was measured (a gauge never inside the gas)."""
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
 def _measured_reflection(hist: dict, info: dict):
     """Mean wall overpressure over the second half of the clean window, / p_s (002 Fig. 2)."""
     window = min(info["duration"], info["clean_duration"])
@@ -250,18 +262,21 @@ def _measured_reflection(hist: dict, info: dict):
 
 
 def _write_outputs(out: Path, res: RunResult, snapshots) -> None:
-    from blastfsi.plotting import plate_histories
+    from blastfsi.plotting import gauge_histories, plate_histories
 
     many = len(res.setups) > 1
+    columns = scheme.history_columns(len(res.scenario.output.gauges))
     for k, hist in enumerate(res.histories):
         name = f"history_member{k}.csv" if many else "history.csv"
-        rows = np.stack([hist[n] for n, _ in scheme.HISTORY_COLUMNS], axis=1)
-        results.write_history(out / name, scheme.HISTORY_COLUMNS, rows)
+        rows = np.stack([hist[n] for n, _ in columns], axis=1)
+        results.write_history(out / name, columns, rows)
         if snapshots:
             results.write_xdmf(out, k, sorted(snapshots), NODE_FIELDS, ZONE_FIELDS, res.setups[k].x.size)
     results.write_summary(out, res.summary)
     if res.scenario.output.plots:
         plate_histories(out / "plots" / "plate_histories.png", res.histories, res.members)
+        if res.scenario.output.gauges:
+            gauge_histories(out / "plots" / "gauges.png", res.histories, res.scenario.output.gauges)
 
 
 class _Progress:

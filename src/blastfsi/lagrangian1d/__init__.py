@@ -2,6 +2,7 @@
 with a free-standing rigid plate (seed 002, Sec. 2)."""
 from blastfsi.lagrangian1d.scheme import (
     Boundaries,
+    Gauges,
     Numerics,
     State,
     advance,
@@ -9,4 +10,4 @@ from blastfsi.lagrangian1d.scheme import (
     total_energy,
 )
 
-__all__ = ["Boundaries", "Numerics", "State", "advance", "initial_state", "total_energy"]
+__all__ = ["Boundaries", "Gauges", "Numerics", "State", "advance", "initial_state", "total_energy"]

@@ -62,6 +62,13 @@ class Boundaries(NamedTuple):
     right_pressure: jnp.ndarray
 
 
+class Gauges(NamedTuple):
+    """Pressure gauges fixed in space (Eulerian), read in the zone that holds them."""
+
+    positions: jnp.ndarray  # (G,) [m]
+    ambient_pressure: jnp.ndarray  # overpressure reference p0 [Pa]
+
+
 class State(NamedTuple):
     x: jnp.ndarray  # node positions at t_j, (N+1,)
     v: jnp.ndarray  # node velocities at t_{j-1/2}, (N+1,)
@@ -75,7 +82,9 @@ class State(NamedTuple):
     peak_face_overpressure: jnp.ndarray
     boundary_work: jnp.ndarray  # work done on the system by the boundaries
     faulted: jnp.ndarray  # True once the state is non-physical (see first_fault for where)
-    hist: jnp.ndarray  # (n_samples, N_HIST) histories sampled in compiled code
+    gauge_impulse: jnp.ndarray  # (G,) int max(p - p0, 0) dt at each gauge
+    gauge_peak: jnp.ndarray  # (G,) peak overpressure at each gauge
+    hist: jnp.ndarray  # (n_samples, N_HIST + G) histories sampled in compiled code
     hist_next: jnp.ndarray  # index of the next history sample to record
 
 
@@ -90,6 +99,11 @@ HISTORY_COLUMNS = (
     ("energy_error", "J/m^2"),
 )
 N_HIST = len(HISTORY_COLUMNS)
+
+
+def history_columns(n_gauges: int) -> tuple:
+    """(name, unit) of every history column: the plate's, then one per gauge."""
+    return HISTORY_COLUMNS + tuple((f"gauge{k}_overpressure", "Pa") for k in range(n_gauges))
 
 
 def zone_pressure(zone_mass, x, e, q, gamma):
@@ -166,6 +180,15 @@ def vnr_step(s: State, dt, a, node_mass, num: Numerics, bc: Boundaries, left_vel
     )
 
 
+def gauge_overpressure(s: State, gauges: Gauges, gamma):
+    """Overpressure in the zone holding each gauge; NaN for a gauge outside the gas."""
+    k = jnp.clip(jnp.searchsorted(s.x, gauges.positions) - 1, 0, s.e.shape[0] - 1)
+    rho = s.zone_mass[k] / (s.x[k + 1] - s.x[k])
+    p = ideal_gas.pressure(rho, s.e[k], gamma) + s.q[k]
+    inside = (gauges.positions >= s.x[0]) & (gauges.positions <= s.x[-1])
+    return jnp.where(inside, p - gauges.ambient_pressure, jnp.nan)
+
+
 def first_fault(s: State):
     """Index of the first zone with a non-physical state (NaN, tangled zone,
     non-positive internal energy), or -1 when the state is healthy. Works on
@@ -175,36 +198,40 @@ def first_fault(s: State):
     return jnp.where(jnp.any(bad), jnp.argmax(bad), -1).astype(jnp.int32)
 
 
-def history_row(s: State, bc: Boundaries, e0, x_right0, right_fixed: bool, gamma):
+def history_row(s: State, bc: Boundaries, gauges: Gauges, e0, x_right0, right_fixed: bool, gamma):
     p = zone_pressure(s.zone_mass, s.x, s.e, s.q, gamma)
     v_plate = 0.0 * s.v[-1] if right_fixed else s.v[-1]
     plate_impulse = s.face_impulse if right_fixed else bc.right_mass * s.v[-1]
     energy_error = total_energy(s, bc) - e0 - s.boundary_work
-    return jnp.stack([
+    plate = jnp.stack([
         s.t, s.x[-1] - x_right0, v_plate, p[-1] - bc.right_pressure, plate_impulse,
         s.face_impulse, p[0] - bc.right_pressure, energy_error,
     ])
+    return jnp.concatenate([plate, gauge_overpressure(s, gauges, gamma)])
 
 
-def initial_state(x, v, e, zone_mass, n_samples: int) -> State:
+def initial_state(x, v, e, zone_mass, n_samples: int, n_gauges: int = 0) -> State:
     x = jnp.asarray(x)
+    g = jnp.zeros((n_gauges,), x.dtype)
     z = jnp.zeros_like(jnp.asarray(e))
     zero = jnp.zeros((), x.dtype)
     return State(
         x=x, v=jnp.asarray(v), e=jnp.asarray(e), q=z, zone_mass=jnp.asarray(zone_mass),
         t=zero, dt_prev=zero, step=jnp.zeros((), jnp.int32), face_impulse=zero,
         peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
-        faulted=jnp.asarray(False), hist=jnp.full((n_samples, N_HIST), jnp.nan, x.dtype),
+        faulted=jnp.asarray(False), gauge_impulse=g, gauge_peak=g - jnp.inf,
+        hist=jnp.full((n_samples, N_HIST + n_gauges), jnp.nan, x.dtype),
         hist_next=jnp.zeros((), jnp.int32),
     )
 
 
-def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0,
-            num: Numerics, bc: Boundaries, left_velocity_set: bool, right_fixed: bool) -> State:
+def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0, num: Numerics, bc: Boundaries,
+            gauges: Gauges, left_velocity_set: bool, right_fixed: bool) -> State:
     """Advance in compiled code until t_stop, max_steps more steps, or a fault.
 
     Steps are shortened to land exactly on t_stop and on every history sample
-    time k * sample_interval, where history row k is recorded. A
+    time k * sample_interval, where history row k is recorded. Gauge impulses
+    and peaks are accumulated every step. A
     non-physical state (detected by the time-step reduction) sets ``faulted``
     and ends the loop without stepping; the state returned is that state, for
     :func:`first_fault` to locate (the last checkpoint on disk stays usable).
@@ -218,7 +245,8 @@ def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0,
 
     def record_if(st, due):
         k = jnp.minimum(st.hist_next, n_samples - 1)
-        row = jax.lax.cond(due, lambda: history_row(st, bc, e0, x_right0, right_fixed, num.gamma), lambda: st.hist[k])
+        row = jax.lax.cond(due, lambda: history_row(st, bc, gauges, e0, x_right0, right_fixed, num.gamma),
+                           lambda: st.hist[k])
         return st._replace(hist=st.hist.at[k].set(row), hist_next=st.hist_next + due.astype(st.hist_next.dtype))
 
     s = record_if(s, (s.hist_next == 0) & (s.step == 0))
@@ -235,6 +263,9 @@ def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0,
             lands = st.t + dt_cfl >= target
             dt = jnp.where(lands, target - st.t, dt_cfl)
             new = vnr_step(st, dt, a, node_mass, num, bc, left_velocity_set, right_fixed)
+            pg = gauge_overpressure(st, gauges, num.gamma)  # at t_j, like the plate load
+            new = new._replace(gauge_impulse=st.gauge_impulse + dt * jnp.nan_to_num(jnp.maximum(pg, 0.0)),
+                               gauge_peak=jnp.fmax(st.gauge_peak, pg))
             due = lands & (target == next_sample_time(st))
             return record_if(new._replace(t=jnp.where(lands, target, new.t)), due)
 

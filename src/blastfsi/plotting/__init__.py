@@ -1,4 +1,4 @@
 """Plots of run results (matplotlib, Agg backend: no screen needed)."""
-from blastfsi.plotting.histories import plate_histories
+from blastfsi.plotting.histories import gauge_histories, plate_histories
 
-__all__ = ["plate_histories"]
+__all__ = ["gauge_histories", "plate_histories"]

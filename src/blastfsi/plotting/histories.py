@@ -26,3 +26,15 @@ def plate_histories(file: Path, histories: list[dict], members: list[dict]) -> N
     fig.tight_layout()
     fig.savefig(file, dpi=120)
     plt.close(fig)
+
+
+def gauge_histories(file: Path, histories: list[dict], positions: list[float]) -> None:
+    """Overpressure at each gauge (member 0 of an ensemble)."""
+    hist = histories[0]
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for k, x in enumerate(positions):
+        ax.plot(hist["time"] * 1e3, hist[f"gauge{k}_overpressure"] / 1e3, lw=1.2, label=f"x = {x:g} m")
+    ax.set_xlabel("time [ms]"), ax.set_ylabel("overpressure [kPa]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(file, dpi=120)
+    plt.close(fig)
