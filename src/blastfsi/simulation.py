@@ -185,7 +185,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
 
 
 def _history_dict(rows: np.ndarray, columns) -> dict:
-    rows = rows[np.isfinite(rows[:, 0])]
+    rows = rows[np.isfinite(rows[:, 0])]  # samples never reached (a fault) stay unrecorded
     return {name: rows[:, i] for i, (name, _) in enumerate(columns)}
 
 

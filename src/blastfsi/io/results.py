@@ -49,7 +49,6 @@ def write_summary(path: Path, summary: dict) -> None:
 
 
 def write_history(file: Path, columns, rows: np.ndarray) -> None:
-    rows = rows[np.all(np.isfinite(rows[:, :1]), axis=1)]  # samples past a fault stay unrecorded
     with open(file, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow([f"{name} [{unit}]" for name, unit in columns])
