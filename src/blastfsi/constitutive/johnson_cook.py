@@ -1,0 +1,155 @@
+"""Johnson-Cook plasticity (000 Eq. 64) with a Mie-Grueneisen EOS (000 Eqs. 65-66).
+
+Stress update per step:
+
+1. Jaumann rotation of the old stress (:func:`.tensor.rotate`, 000 Eq. 30).
+2. Elastic trial deviator s* = s + 2G dev(d eps), equivalent stress q* = sqrt(3/2 s*:s*).
+3. Radial return solved exactly (not a one-step estimate): the plastic strain increment
+   d eps_p >= 0 is the root of
+       q* - 3G d eps_p - sigma_y(eps_p + d eps_p, d eps_p/dt, T) = 0,
+       sigma_y = (A + B eps^n)(1 + C ln max(eps_dot/eps_dot_0, 1))(1 - T*^m),     000 Eq. (64)
+   found by Newton iteration safeguarded by bisection on [0, (q* - sigma_y0)/(3G)], so the
+   returned stress lies on the yield surface at the end of the step to round-off. The rate
+   term is floored at eps_dot* = 1 (no softening below the reference rate); T* is clipped
+   to [0, 1] (sigma_y = 0 at and above melt).
+4. Plastic-work heating dT = chi sigma_y d eps_p / (rho c_p), chi the Taylor-Quinney factor;
+   the temperature *rise* above room temperature is kept in history (all-zero history = room
+   temperature), the softening of a step uses the temperature at its start.
+5. Pressure from the EOS at the new density, implicit in the new energy (000 Eq. 13 with the
+   trapezoidal stress; :func:`.tensor.energy_implicit`).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from blastfsi.constitutive import Model, PointState, register
+from blastfsi.constitutive import tensor as T
+from blastfsi.eos import mie_gruneisen as mg
+from blastfsi.eos.mie_gruneisen import MieGruneisenParams
+
+HISTORY_COLUMNS = ("temperature_rise",)
+MAX_ITERATIONS = 60
+
+
+class JohnsonCookParams(NamedTuple):
+    shear_modulus: float
+    A: float
+    B: float
+    n: float
+    C: float
+    m: float
+    reference_strain_rate: float
+    room_temperature: float
+    melt_temperature: float
+    specific_heat: float
+    taylor_quinney: float
+    eos: MieGruneisenParams
+
+
+def homologous_temperature(temperature, p: JohnsonCookParams):
+    """T* = (T - T_room)/(T_melt - T_room), clipped to [0, 1]."""
+    return jnp.clip((temperature - p.room_temperature) / (p.melt_temperature - p.room_temperature), 0.0, 1.0)
+
+
+def flow_stress(eps_p, strain_rate, temperature, p: JohnsonCookParams):
+    """000 Eq. (64) with eps_dot* floored at 1."""
+    rate = jnp.maximum(strain_rate / p.reference_strain_rate, 1.0)
+    return ((p.A + p.B * jnp.maximum(eps_p, 0.0) ** p.n) * (1.0 + p.C * jnp.log(rate))
+            * (1.0 - homologous_temperature(temperature, p) ** p.m))
+
+
+def _flow_stress_and_slope(eps_p, d_eps, dt, thermal, p: JohnsonCookParams):
+    """sigma_y(eps_p + d_eps, d_eps/dt) and d sigma_y / d d_eps at fixed temperature factor."""
+    eps = eps_p + d_eps
+    rate = d_eps / (dt * p.reference_strain_rate)
+    above = rate > 1.0
+    rate_factor = 1.0 + p.C * jnp.log(jnp.where(above, rate, 1.0))
+    safe_eps = jnp.where(eps > 0.0, eps, 1.0)
+    hard = p.A + p.B * jnp.where(eps > 0.0, eps ** p.n, 0.0)
+    dhard = jnp.where(eps > 0.0, p.n * p.B * safe_eps ** (p.n - 1.0), jnp.inf)
+    drate = jnp.where(above, p.C / jnp.where(d_eps > 0.0, d_eps, 1.0), 0.0)
+    return hard * rate_factor * thermal, (dhard * rate_factor + hard * drate) * thermal
+
+
+def plastic_increment(q_trial, eps_p, dt, temperature, p: JohnsonCookParams):
+    """Root d eps_p >= 0 of q* - 3G d eps_p - sigma_y(eps_p + d eps_p, d eps_p/dt, T) = 0 (0 if elastic)."""
+    thermal = 1.0 - homologous_temperature(temperature, p) ** p.m
+    three_g = 3.0 * p.shear_modulus
+    dt = jnp.maximum(dt, jnp.finfo(q_trial.dtype).tiny)
+    y0, _ = _flow_stress_and_slope(eps_p, jnp.zeros_like(q_trial), dt, thermal, p)
+    plastic = q_trial > y0
+    hi = jnp.where(plastic, (q_trial - y0) / three_g, 0.0)  # perfectly plastic bound: the root is below it
+    lo = jnp.zeros_like(hi)
+    tol = 8.0 * jnp.finfo(q_trial.dtype).eps
+
+    def residual(x):
+        y, dy = _flow_stress_and_slope(eps_p, x, dt, thermal, p)
+        return q_trial - three_g * x - y, -three_g - dy
+
+    def cond(c):
+        lo, hi, x, done, it = c
+        return jnp.logical_and(it < MAX_ITERATIONS, ~jnp.all(done))
+
+    def body(c):
+        lo, hi, x, done, it = c
+        g, dg = residual(x)
+        lo = jnp.where(g > 0.0, x, lo)
+        hi = jnp.where(g > 0.0, hi, x)
+        newton = x - g / dg
+        inside = (newton > lo) & (newton < hi) & jnp.isfinite(newton)
+        x_new = jnp.where(inside, newton, 0.5 * (lo + hi))
+        converged = (jnp.abs(g) <= tol * q_trial) | (hi - lo <= tol * hi)
+        done = done | converged
+        return lo, hi, jnp.where(done, x, x_new), done, it + 1
+
+    _, _, x, _, _ = jax.lax.while_loop(cond, body, (lo, hi, hi, ~plastic, 0))
+    return jnp.where(plastic, x, 0.0)
+
+
+def update(ps: PointState, dstrain, dspin, dt, params: JohnsonCookParams) -> PointState:
+    de = T.to_voigt(dstrain)
+    rho_old = T.old_density(ps.density, de)
+    s_old = T.deviator(ps.stress)
+    s_trial = T.deviator(T.rotate(ps.stress, dspin)) + 2.0 * params.shear_modulus * T.deviator(de)
+    q_trial = T.von_mises(s_trial)
+    temperature = params.room_temperature + ps.history[:, 0]
+    d_eps = plastic_increment(q_trial, ps.plastic_strain, dt, temperature, params)
+    q_new = q_trial - 3.0 * params.shear_modulus * d_eps  # = sigma_y on the surface when plastic
+    s_new = T.radial_return(s_trial, q_trial, q_new)
+    heating = params.taylor_quinney * q_new * d_eps / (ps.density * params.specific_heat)
+    p_old = mg.pressure(rho_old, ps.energy, params.eos)  # 000 Eq. (65)
+    energy, p_new = T.energy_implicit(ps.energy, s_old, s_new, p_old,
+                                      mg.reference_pressure(ps.density, params.eos),
+                                      mg.energy_coefficient(ps.density, params.eos), de, rho_old)
+    return ps._replace(stress=T.compose(s_new, p_new), energy=energy,
+                       plastic_strain=ps.plastic_strain + d_eps,
+                       history=ps.history.at[:, 0].add(heating))
+
+
+def wave_speed(ps: PointState, params: JohnsonCookParams):
+    """sqrt(c_bulk^2 + 4G/(3 rho)) with c_bulk^2 the EOS isentropic value (floored at 0)."""
+    c2 = jnp.maximum(mg.sound_speed_squared(ps.density, ps.energy, params.eos), 0.0)
+    return jnp.sqrt(c2 + 4.0 / 3.0 * params.shear_modulus / ps.density)
+
+
+def params_from(material) -> JohnsonCookParams:
+    for key, lo in (("shear_modulus", 0.0), ("specific_heat", 0.0), ("density", 0.0),
+                    ("reference_strain_rate", 0.0), ("C0", 0.0)):
+        if not getattr(material, key) > lo:
+            raise ValueError(f"{key} must be > {lo}, got {getattr(material, key)}")
+    if not material.melt_temperature > material.room_temperature:
+        raise ValueError(f"melt_temperature must be > room_temperature ({material.room_temperature} K), "
+                         f"got {material.melt_temperature}")
+    if not 0.0 <= material.taylor_quinney <= 1.0:
+        raise ValueError(f"taylor_quinney must be in [0, 1], got {material.taylor_quinney}")
+    return JohnsonCookParams(
+        material.shear_modulus, material.A, material.B, material.n, material.C, material.m,
+        material.reference_strain_rate, material.room_temperature, material.melt_temperature,
+        material.specific_heat, material.taylor_quinney,
+        MieGruneisenParams(material.density, material.C0, material.S, material.gamma0, material.a))
+
+
+MODEL = register(Model("johnson-cook", update, wave_speed, params_from, history_size=len(HISTORY_COLUMNS)))

@@ -1,0 +1,320 @@
+"""Multi-dimensional field output that ParaView opens as a time series: Eulerian grids and MPM particles.
+
+Format: one HDF5 file per snapshot (heavy data) + one XDMF 3 temporal collection (the time index), the same
+pair the 1D output in ``results.py`` uses. Chosen over VTKHDF because (a) the index is a small text file
+rewritten from the list of snapshots, so a restart or a crash never corrupts earlier snapshots (a transient
+VTKHDF file is one growing HDF5 file); (b) the pip ``vtk`` wheel reads the whole XDMF time series
+(``vtkXdmfReader``: time values included), while a per-snapshot ``.vtkhdf`` + ``.series``/``.pvd`` index is
+only read as a series by ParaView itself, so the time index could not be checked with a real reader;
+(c) the snapshot files stay plain HDF5 that h5py users read directly.
+
+Grids use a ``3DCoRectMesh`` topology with ``ORIGIN_DXDYDZ`` geometry (no cell connectivity is stored).
+Conventions, all checked by ``tests/test_io_fields.py`` with ``vtkXdmfReader``:
+
+- XDMF orders CoRectMesh dimensions, origin and spacing z, y, x (slowest to fastest), and both ParaView
+  readers (``XDMF Reader`` and ``Xdmf3Reader``, VTK ``IO/Xdmf2``/``IO/Xdmf3``) reverse them into VTK's x, y,
+  z. Our arrays are indexed ``[i, j, k]`` = (x, y, z), so each dataset is stored with its spatial axes
+  reversed (``[k, j, i]``, x fastest) and the XML lists z, y, x: ParaView shows x as x.
+- 1D and 2D grids are written as 3D grids one cell thick in the missing directions (thickness = the cell
+  size along x, origin 0 there). A ``2DCoRectMesh`` would be placed in VTK's y-z plane by both readers
+  (x shown as y), and a grid one *node* thick loses its cell data in ``vtkXdmfReader``.
+- Vectors are stored with 3 components (zero-padded), tensors with 9 (row-major xx, xy, xz, yx, ..., zz;
+  zero-padded from 2x2 / 1x1), the widths ParaView's glyph and tensor filters expect. We store all 9
+  components rather than 6-component Voigt because XDMF ``Tensor6`` (xx, xy, xz, yy, yz, zz) and VTK's
+  symmetric order (xx, yy, zz, xy, yz, xz) disagree; 9 components are read the same way everywhere.
+- Particles are an XDMF ``Polyvertex`` topology with node-centred data; coordinates are padded to 3 with
+  zeros. A snapshot needs at least one particle: ``vtkXdmfReader`` fails on an empty geometry.
+
+Each snapshot file also records, as attributes, what is needed to undo the padding (``read_*_snapshot``).
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import NamedTuple
+
+import h5py
+import numpy as np
+
+KIND_COMPONENTS = {"scalar": 1, "vector": 3, "tensor": 9}  # components stored on disk per field kind
+_DTYPES = {4: np.float32, 8: np.float64}  # XDMF Precision (bytes) -> stored dtype
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+COORDINATES = "coordinates"  # particle-snapshot dataset holding the (n, 3) positions
+
+
+class GridSnapshot(NamedTuple):
+    time: float
+    origin: np.ndarray
+    spacing: np.ndarray
+    fields: dict[str, np.ndarray]
+
+
+class ParticleSnapshot(NamedTuple):
+    time: float
+    positions: np.ndarray
+    fields: dict[str, np.ndarray]
+
+
+# --------------------------------------------------------------------------------------------------- checks
+def grid_geometry(origin, spacing) -> tuple[np.ndarray, np.ndarray]:
+    """Validated (origin, spacing) as float arrays of length ndim = len(origin) in 1..3.
+
+    ``spacing`` is one cell size for all axes or one per axis; every value must be finite and > 0.
+    """
+    origin = np.atleast_1d(np.asarray(origin, dtype=float))
+    if origin.ndim != 1 or not 1 <= origin.size <= 3 or not np.all(np.isfinite(origin)):
+        raise ValueError(f"origin must be 1 to 3 finite coordinates (x[, y[, z]]), got {origin.tolist()}")
+    spacing = np.asarray(spacing, dtype=float)
+    if spacing.ndim == 0:
+        spacing = np.full(origin.shape, float(spacing))
+    if spacing.shape != origin.shape or not np.all(np.isfinite(spacing) & (spacing > 0)):
+        raise ValueError(f"spacing must be one cell size > 0 or {origin.size} of them (one per axis), "
+                         f"got {np.asarray(spacing).tolist()}")
+    return origin, spacing
+
+
+def _dtype(precision: int):
+    if precision not in _DTYPES:
+        raise ValueError(f"precision must be 4 (float32) or 8 (float64) bytes, got {precision!r}")
+    return _DTYPES[precision]
+
+
+def _time(time) -> float:
+    time = float(time)
+    if not np.isfinite(time):
+        raise ValueError(f"time must be finite, got {time}")
+    return time
+
+
+def _check_names(names, reserved=()) -> None:
+    for name in names:
+        if not isinstance(name, str) or not _NAME.match(name) or name in reserved:
+            raise ValueError(f"field name {name!r} must be an identifier (letters, digits, '_')"
+                             + (f" other than {', '.join(reserved)}" if reserved else ""))
+
+
+def _check_kinds(field_kinds: Mapping[str, str], reserved=()) -> None:
+    _check_names(field_kinds, reserved)
+    for name, kind in field_kinds.items():
+        if kind not in KIND_COMPONENTS:
+            raise ValueError(f"kind of field {name!r} must be one of {sorted(KIND_COMPONENTS)}, got {kind!r}")
+
+
+def _check_snapshot_list(snapshots, layout: tuple[str, ...]) -> None:
+    if not snapshots:
+        raise ValueError("snapshots must list at least one snapshot")
+    for entry in snapshots:
+        if len(entry) != len(layout) or Path(entry[0]).is_absolute():
+            raise ValueError(f"each snapshot must be ({', '.join(layout)}), got {entry!r}")
+    times = np.array([_time(entry[1]) for entry in snapshots])
+    if np.any(np.diff(times) <= 0):
+        raise ValueError(f"snapshot times must be strictly increasing, got {times.tolist()}")
+
+
+# ----------------------------------------------------------------------------------------- components
+def _padded(name: str, array: np.ndarray, lead_shape: tuple[int, ...], ndim: int) -> tuple[str, np.ndarray, tuple]:
+    """(kind, array with its value axes padded to 1, 3 or 9 stored components, value shape as given).
+
+    The value shape is what follows ``lead_shape``: () scalar, (d,) vector, (d, d) tensor, d = ndim or 3.
+    """
+    lead = len(lead_shape)
+    if array.shape[:lead] != lead_shape:
+        raise ValueError(f"field {name!r} has shape {array.shape}; its leading axes must be {lead_shape}")
+    value_shape = array.shape[lead:]
+    if value_shape == ():
+        return "scalar", array, value_shape
+    d = value_shape[0]
+    if d not in (ndim, 3) or value_shape not in ((d,), (d, d)):
+        raise ValueError(f"field {name!r} has shape {array.shape}: after the leading axes {lead_shape} allowed "
+                         f"are () scalar, ({ndim},) or (3,) vector, ({ndim}, {ndim}) or (3, 3) tensor")
+    pad = [(0, 0)] * lead + [(0, 3 - d)] * len(value_shape)
+    padded = np.pad(array, pad)
+    if len(value_shape) == 1:
+        return "vector", padded, value_shape
+    return "tensor", padded.reshape(lead_shape + (9,)), value_shape
+
+
+def _unpadded(stored: np.ndarray, lead: int, value_shape: tuple[int, ...]) -> np.ndarray:
+    if value_shape == ():
+        return stored
+    d = value_shape[0]
+    if len(value_shape) == 1:
+        return stored[..., :d]
+    return stored.reshape(stored.shape[:lead] + (3, 3))[..., :d, :d]
+
+
+def _to_xdmf_order(array: np.ndarray, ndim: int) -> np.ndarray:
+    """Spatial axes (x[, y[, z]]) -> (z, y, x), missing ones as length 1, value axis kept last."""
+    order = tuple(reversed(range(ndim))) + tuple(range(ndim, array.ndim))
+    out = np.transpose(array, order)
+    return np.ascontiguousarray(out.reshape((1,) * (3 - ndim) + out.shape))
+
+
+def _from_xdmf_order(stored: np.ndarray, ndim: int) -> np.ndarray:
+    out = stored.reshape(stored.shape[3 - ndim:])
+    return np.transpose(out, tuple(reversed(range(ndim))) + tuple(range(ndim, out.ndim)))
+
+
+# --------------------------------------------------------------------------------------------- XDMF text
+def _data_item(dims, reference: str, precision: int) -> str:
+    return (f'<DataItem Dimensions="{" ".join(str(int(n)) for n in dims)}" NumberType="Float" '
+            f'Precision="{precision}" Format="HDF">{reference}</DataItem>')
+
+
+def _attributes(h5_name: str, field_kinds: Mapping[str, str], lead_dims, center: str, precision: int) -> str:
+    parts = []
+    for name, kind in field_kinds.items():
+        width = KIND_COMPONENTS[kind]
+        dims = tuple(lead_dims) + ((width,) if width > 1 else ())
+        parts.append(f'<Attribute Name="{name}" AttributeType="{kind.capitalize()}" Center="{center}">'
+                     f'{_data_item(dims, f"{h5_name}:/{name}", precision)}</Attribute>')
+    return "".join(parts)
+
+
+def _write_collection(xdmf_path: Path, grids: list[str]) -> None:
+    """Write the temporal collection atomically (ParaView may be reading the previous one)."""
+    xdmf_path = Path(xdmf_path)
+    text = ('<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain><Grid Name="series" GridType="Collection" '
+            f'CollectionType="Temporal">\n{"".join(grids)}</Grid></Domain></Xdmf>\n')
+    tmp = xdmf_path.with_name(xdmf_path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(xdmf_path)
+
+
+def _xml_file_name(name) -> str:
+    return str(name).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+
+
+# ------------------------------------------------------------------------------------------------ grids
+def write_grid_snapshot(h5_path, time, origin, spacing, fields: Mapping[str, np.ndarray], *,
+                        precision: int = 8) -> dict[str, str]:
+    """Write cell-centred fields of a uniform grid (1D, 2D or 3D) to one HDF5 file.
+
+    ``origin`` is the lower corner (x[, y[, z]]), ``spacing`` the cell size (one, or one per axis). Each
+    field is indexed ``[i(, j(, k))]`` = (x, y, z) with an optional value shape (d,) or (d, d), d = ndim or 3.
+    Returns ``{name: kind}`` for :func:`write_grid_series`.
+    """
+    origin, spacing = grid_geometry(origin, spacing)
+    ndim = origin.size
+    dtype = _dtype(precision)
+    if not fields:
+        raise ValueError("fields must hold at least one array")
+    _check_names(fields)
+    arrays = {name: np.asarray(a) for name, a in fields.items()}
+    shape = next(iter(arrays.values())).shape[:ndim]
+    if len(shape) != ndim or min(shape) < 1:
+        raise ValueError(f"fields of a {ndim}D grid need {ndim} spatial axes with >= 1 cell, got shape {shape}")
+    kinds = {}
+    with h5py.File(h5_path, "w") as f:
+        f.attrs.update(time=_time(time), origin=origin, spacing=spacing, shape=np.array(shape))
+        for name, array in arrays.items():
+            kind, padded, value_shape = _padded(name, array, shape, ndim)
+            ds = f.create_dataset(name, data=_to_xdmf_order(padded.astype(dtype), ndim))
+            ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
+            kinds[name] = kind
+    return kinds
+
+
+def read_grid_snapshot(h5_path) -> GridSnapshot:
+    """Read a file of :func:`write_grid_snapshot` back into arrays indexed (x, y, z) as they were given."""
+    with h5py.File(h5_path, "r") as f:
+        origin, spacing = np.array(f.attrs["origin"]), np.array(f.attrs["spacing"])
+        ndim = origin.size
+        fields = {name: _unpadded(_from_xdmf_order(ds[()], ndim), ndim, tuple(ds.attrs["value_shape"]))
+                  for name, ds in f.items()}
+        return GridSnapshot(float(f.attrs["time"]), origin, spacing, fields)
+
+
+def write_grid_series(xdmf_path, snapshots: Sequence[tuple[str, float]], shape: Sequence[int], origin, spacing,
+                      field_kinds: Mapping[str, str], *, precision: int = 8) -> None:
+    """XDMF temporal collection over grid snapshots: ``snapshots`` = [(h5 file relative to the XDMF, time)].
+
+    ``field_kinds`` maps each field name to "scalar", "vector" or "tensor" (what
+    :func:`write_grid_snapshot` returns); ``shape`` is the number of cells along x[, y[, z]].
+    """
+    origin, spacing = grid_geometry(origin, spacing)
+    ndim = origin.size
+    shape = tuple(int(n) for n in shape)
+    if len(shape) != ndim or min(shape) < 1:
+        raise ValueError(f"shape must give >= 1 cell along each of the {ndim} axes of origin, got {shape}")
+    _dtype(precision)
+    _check_kinds(field_kinds)
+    _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time"))
+    cells_zyx = (1,) * (3 - ndim) + shape[::-1]
+    origin_zyx = np.concatenate([np.zeros(3 - ndim), origin[::-1]])
+    spacing_zyx = np.concatenate([np.full(3 - ndim, spacing[0]), spacing[::-1]])
+    geometry = "".join(f'<DataItem Dimensions="3" NumberType="Float" Precision="8" Format="XML">'
+                       f'{" ".join(repr(float(v)) for v in values)}</DataItem>' for values in (origin_zyx, spacing_zyx))
+    grids = []
+    for index, (h5_name, time) in enumerate(snapshots):
+        grids.append(
+            f'<Grid Name="step{index}" GridType="Uniform"><Time Value="{float(time)!r}"/>'
+            f'<Topology TopologyType="3DCoRectMesh" Dimensions="{" ".join(str(n + 1) for n in cells_zyx)}"/>'
+            f'<Geometry GeometryType="ORIGIN_DXDYDZ">{geometry}</Geometry>'
+            f'{_attributes(_xml_file_name(h5_name), field_kinds, cells_zyx, "Cell", precision)}</Grid>\n')
+    _write_collection(xdmf_path, grids)
+
+
+# -------------------------------------------------------------------------------------------- particles
+def write_particle_snapshot(h5_path, time, positions, fields: Mapping[str, np.ndarray], *, active=None,
+                            precision: int = 8) -> dict[str, str]:
+    """Write particles (positions (n, ndim), ndim 1..3) and their data to one HDF5 file.
+
+    Fields are (n,) scalars, (n, d) vectors or (n, d, d) tensors, d = ndim or 3. ``active`` (bool (n,)) keeps
+    only the active entries of a fixed-capacity pool. Returns ``{name: kind}`` for
+    :func:`write_particle_series`; the number of particles written is ``active.sum()`` (or n).
+    """
+    dtype = _dtype(precision)
+    positions = np.asarray(positions)
+    if positions.ndim != 2 or not 1 <= positions.shape[1] <= 3:
+        raise ValueError(f"positions must have shape (n, ndim) with ndim 1..3, got {positions.shape}")
+    n, ndim = positions.shape
+    keep = np.ones(n, dtype=bool) if active is None else np.asarray(active)
+    if keep.shape != (n,) or keep.dtype != bool:
+        raise ValueError(f"active must be a boolean array of shape ({n},), got {keep.dtype} {keep.shape}")
+    count = int(keep.sum())
+    if count == 0:
+        raise ValueError("a particle snapshot needs at least one (active) particle; ParaView's XDMF readers fail "
+                         "on an empty geometry, so skip this snapshot")
+    _check_names(fields, reserved=(COORDINATES,))
+    kinds = {}
+    with h5py.File(h5_path, "w") as f:
+        f.attrs.update(time=_time(time), n_points=count, ndim=ndim)
+        f.create_dataset(COORDINATES, data=np.pad(positions[keep], ((0, 0), (0, 3 - ndim))).astype(dtype))
+        for name, array in fields.items():
+            kind, padded, value_shape = _padded(name, np.asarray(array), (n,), ndim)
+            ds = f.create_dataset(name, data=padded[keep].astype(dtype))
+            ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
+            kinds[name] = kind
+    return kinds
+
+
+def read_particle_snapshot(h5_path) -> ParticleSnapshot:
+    """Read a file of :func:`write_particle_snapshot` back: positions (n, ndim) and fields as given."""
+    with h5py.File(h5_path, "r") as f:
+        ndim = int(f.attrs["ndim"])
+        fields = {name: _unpadded(ds[()], 1, tuple(ds.attrs["value_shape"]))
+                  for name, ds in f.items() if name != COORDINATES}
+        return ParticleSnapshot(float(f.attrs["time"]), f[COORDINATES][:, :ndim], fields)
+
+
+def write_particle_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]], field_kinds: Mapping[str, str],
+                          *, precision: int = 8) -> None:
+    """XDMF temporal collection over particle snapshots: ``snapshots`` = [(h5 file relative to the XDMF, time,
+    number of particles in it)]; ``field_kinds`` as returned by :func:`write_particle_snapshot`."""
+    _dtype(precision)
+    _check_kinds(field_kinds, reserved=(COORDINATES,))
+    _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time", "particles"))
+    grids = []
+    for index, (h5_name, time, count) in enumerate(snapshots):
+        count = int(count)
+        if count < 1:
+            raise ValueError(f"snapshot {h5_name!r} must hold >= 1 particle, got {count}")
+        h5_name = _xml_file_name(h5_name)
+        grids.append(
+            f'<Grid Name="step{index}" GridType="Uniform"><Time Value="{float(time)!r}"/>'
+            f'<Topology TopologyType="Polyvertex" NodesPerElement="1" NumberOfElements="{count}"/>'
+            f'<Geometry GeometryType="XYZ">{_data_item((count, 3), f"{h5_name}:/{COORDINATES}", precision)}'
+            f'</Geometry>{_attributes(h5_name, field_kinds, (count,), "Node", precision)}</Grid>\n')
+    _write_collection(xdmf_path, grids)

@@ -1,0 +1,61 @@
+"""Pictures of a grid field: 1D line, 2D colour map, 3D mid-plane (z = middle) colour map."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+from blastfsi.io.fields import grid_geometry
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def field_image(origin, spacing, field) -> tuple[np.ndarray, tuple[float, float, float, float], float | None]:
+    """(image, extent, z of the plane or None) of a cell-centred 2D field or of a 3D field's mid-plane.
+
+    ``image[row, col]`` is the value at y-cell ``row``, x-cell ``col`` (row 0 at the lower y edge), as
+    ``imshow(image, origin="lower", extent=extent)`` expects; extent = (x0, x1, y0, y1) of the cell faces.
+    In 3D the plane is z = z0 + nz dz / 2: the middle cell layer for odd nz, else the mean of the two layers
+    around it (linear interpolation between their centres, which lie dz/2 on either side).
+    """
+    field = np.asarray(field)
+    origin, spacing = grid_geometry(origin, spacing)
+    if field.ndim != origin.size or origin.size not in (2, 3):
+        raise ValueError(f"field must be a 2D or 3D cell array matching origin (ndim {origin.size}), "
+                         f"got shape {field.shape}")
+    z_plane = None
+    if field.ndim == 3:
+        nz = field.shape[2]
+        field = 0.5 * (field[:, :, (nz - 1) // 2] + field[:, :, nz // 2])
+        z_plane = float(origin[2] + 0.5 * nz * spacing[2])
+    upper = origin[:2] + spacing[:2] * np.array(field.shape)
+    return field.T, (float(origin[0]), float(upper[0]), float(origin[1]), float(upper[1])), z_plane
+
+
+def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x [m]", "y [m]", "z [m]"),
+                        title: str = "pressure") -> None:
+    """Save a PNG of a cell-centred pressure field [Pa] on a uniform grid (lower corner ``origin``)."""
+    pressure = np.asarray(pressure, dtype=float)
+    origin, spacing = grid_geometry(origin, spacing)
+    if len(axis_labels) < origin.size:
+        raise ValueError(f"axis_labels must name {origin.size} axes, got {list(axis_labels)}")
+    if pressure.ndim == 1 and origin.size == 1:
+        fig, ax = plt.subplots(figsize=(8, 4.5))
+        x = origin[0] + spacing[0] * (np.arange(pressure.size) + 0.5)
+        ax.plot(x, pressure, lw=1.2)
+        ax.set_xlabel(axis_labels[0]), ax.set_ylabel("pressure [Pa]"), ax.grid(alpha=0.3)
+    else:
+        image, extent, z_plane = field_image(origin, spacing, pressure)
+        fig, ax = plt.subplots(figsize=(8, 6))
+        shown = ax.imshow(image, origin="lower", extent=extent, aspect="equal", interpolation="nearest",
+                          cmap="viridis")
+        fig.colorbar(shown, ax=ax, label="pressure [Pa]")
+        ax.set_xlabel(axis_labels[0]), ax.set_ylabel(axis_labels[1])
+        if z_plane is not None:
+            title = f"{title}, mid-plane {axis_labels[2]} = {z_plane:.4g}"
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(Path(png_path), dpi=120)
+    plt.close(fig)

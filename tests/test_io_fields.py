@@ -1,0 +1,262 @@
+"""Grid and particle snapshots + XDMF series, read back with VTK's own XDMF reader (ParaView's engine).
+
+Field values are analytic functions of position that vary differently along x, y and z; every cell (point)
+VTK reports is checked against the function evaluated at the cell centre (point) *VTK* computes, so a swap
+of axes, a wrong origin/spacing order or a wrong memory order fails. The only tolerance is round-off in
+those coordinates (a few ulp of |x| ~ 1, amplified by the field's gradients ~ 10): rtol = atol = 1e-12.
+"""
+import matplotlib.image as mpimg
+import numpy as np
+import pytest
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonCore import VTK_DOUBLE, VTK_FLOAT
+from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
+from vtkmodules.vtkFiltersCore import vtkCellCenters
+from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
+
+from blastfsi.io.fields import (read_grid_snapshot, read_particle_snapshot, write_grid_series, write_grid_snapshot,
+                                write_particle_series, write_particle_snapshot)
+from blastfsi.plotting.fields import field_image, plot_pressure_field
+
+TOL = dict(rtol=1e-12, atol=1e-12)
+
+
+def scalar_field(x, y, z, t):
+    return 1.0 + 3.0 * x - 7.0 * y + 11.0 * z ** 2 + 1e3 * t
+
+
+def vector_field(x, y, z):
+    return np.stack([x + 2 * y, 5 * y - z, 0.5 * x * z], axis=-1)
+
+
+def cell_centres(origin, spacing, shape):
+    axes = [o + d * (np.arange(n) + 0.5) for o, d, n in zip(origin, spacing, shape)]
+    return np.meshgrid(*axes, indexing="ij")
+
+
+class Series:
+    """An XDMF file opened with vtkXdmfReader: its time values and its dataset at a given time."""
+
+    def __init__(self, path):
+        self.reader = vtkXdmfReader()
+        self.reader.SetFileName(str(path))
+        self.reader.UpdateInformation()
+        self.times = list(self.reader.GetOutputInformation(0).Get(vtkStreamingDemandDrivenPipeline.TIME_STEPS()))
+
+    def at(self, time):
+        self.reader.UpdateTimeStep(time)
+        out = self.reader.GetOutputDataObject(0)
+        data = out.NewInstance()
+        data.DeepCopy(out)
+        return data
+
+
+def vtk_cell_centres(data):
+    centres = vtkCellCenters()
+    centres.SetInputData(data)
+    centres.Update()
+    return vtk_to_numpy(centres.GetOutput().GetPoints().GetData())
+
+
+def cell_array(data, name):
+    return vtk_to_numpy(data.GetCellData().GetArray(name))
+
+
+# ------------------------------------------------------------------------------------------------ grids
+def write_series(tmp_path, origin, spacing, shape, fields_at, times, **kw):
+    entries, kinds = [], None
+    for n, t in enumerate(times):
+        name = f"grid_{n:04d}.h5"
+        kinds = write_grid_snapshot(tmp_path / name, t, origin, spacing, fields_at(t), **kw)
+        entries.append((name, t))
+    write_grid_series(tmp_path / "grid.xdmf", entries, shape, origin, spacing, kinds, **kw)
+    return Series(tmp_path / "grid.xdmf")
+
+
+def test_grid_3d_series(tmp_path):
+    origin, spacing, shape = (0.5, -1.0, 2.0), (0.1, 0.2, 0.3), (5, 4, 3)
+    x, y, z = cell_centres(origin, spacing, shape)
+    tensor = np.zeros(shape + (3, 3))
+    tensor[..., 0, 1], tensor[..., 1, 0], tensor[..., 2, 2] = x, y, z
+    times = [0.0, 2.5e-4, 1.0e-3]
+    series = write_series(tmp_path, origin, spacing, shape, lambda t: {
+        "pressure": scalar_field(x, y, z, t), "velocity": vector_field(x, y, z), "stress": tensor}, times)
+    assert series.times == times
+    for t in times:
+        grid = series.at(t)
+        assert grid.GetNumberOfCells() == 60
+        np.testing.assert_allclose(grid.GetBounds(), (0.5, 1.0, -1.0, -0.2, 2.0, 2.9), **TOL)
+        c = vtk_cell_centres(grid)
+        np.testing.assert_allclose(cell_array(grid, "pressure"), scalar_field(*c.T, t), **TOL)
+        np.testing.assert_allclose(cell_array(grid, "velocity"), vector_field(*c.T), **TOL)
+        stress = cell_array(grid, "stress")
+        assert stress.shape == (60, 9)  # row-major xx xy xz yx yy yz zx zy zz
+        np.testing.assert_allclose(stress[:, [1, 3, 8]], c, **TOL)
+        assert np.all(stress[:, [0, 2, 4, 5, 6, 7]] == 0.0)
+
+
+def test_grid_2d_series_with_padded_vectors(tmp_path):
+    origin, spacing, shape = (-1.0, 2.0), 0.25, (6, 3)
+    x, y = cell_centres(origin, (spacing, spacing), shape)
+    times = [0.0, 1e-4]
+    series = write_series(tmp_path, origin, spacing, shape, lambda t: {
+        "pressure": scalar_field(x, y, 0.0, t), "velocity": vector_field(x, y, 0.0)[..., :2]}, times)
+    assert series.times == times
+    grid = series.at(times[1])
+    assert grid.GetNumberOfCells() == 18
+    # one cell thick in z, x shown as x
+    np.testing.assert_allclose(grid.GetBounds(), (-1.0, 0.5, 2.0, 2.75, 0.0, 0.25), **TOL)
+    c = vtk_cell_centres(grid)
+    np.testing.assert_allclose(cell_array(grid, "pressure"), scalar_field(c[:, 0], c[:, 1], 0.0, times[1]), **TOL)
+    velocity = cell_array(grid, "velocity")
+    assert velocity.shape == (18, 3)
+    np.testing.assert_allclose(velocity[:, :2], vector_field(c[:, 0], c[:, 1], 0.0)[:, :2], **TOL)
+    assert np.all(velocity[:, 2] == 0.0)
+
+
+def test_grid_1d_series(tmp_path):
+    origin, spacing, shape = (3.0,), 0.5, (7,)
+    (x,) = cell_centres(origin, (spacing,), shape)
+    series = write_series(tmp_path, origin, spacing, shape, lambda t: {"pressure": scalar_field(x, 0, 0, t)}, [2.0])
+    assert series.times == [2.0]
+    grid = series.at(2.0)
+    assert grid.GetNumberOfCells() == 7
+    np.testing.assert_allclose(grid.GetBounds(), (3.0, 6.5, 0.0, 0.5, 0.0, 0.5), **TOL)
+    c = vtk_cell_centres(grid)
+    np.testing.assert_allclose(cell_array(grid, "pressure"), scalar_field(c[:, 0], 0, 0, 2.0), **TOL)
+
+
+def test_grid_float32(tmp_path):
+    origin, spacing, shape = (0.0, 0.0, 0.0), 0.1, (3, 4, 5)
+    x, y, z = cell_centres(origin, (spacing,) * 3, shape)
+    p = scalar_field(x, y, z, 0.0)
+    series = write_series(tmp_path, origin, spacing, shape, lambda t: {"pressure": p}, [0.0], precision=4)
+    grid = series.at(0.0)
+    array = grid.GetCellData().GetArray("pressure")
+    assert array.GetDataType() == VTK_FLOAT
+    c = vtk_cell_centres(grid)
+    # float32 storage: relative rounding 2**-24 of values ~ 10
+    np.testing.assert_allclose(vtk_to_numpy(array), scalar_field(*c.T, 0.0), rtol=2 ** -23)
+
+
+def test_grid_snapshot_round_trip(tmp_path):
+    rng = np.random.default_rng(0)
+    fields = {"pressure": rng.random((4, 3)), "velocity": rng.random((4, 3, 2)), "stress": rng.random((4, 3, 2, 2))}
+    kinds = write_grid_snapshot(tmp_path / "s.h5", 0.125, (1.0, 2.0), (0.5, 0.25), fields)
+    assert kinds == {"pressure": "scalar", "velocity": "vector", "stress": "tensor"}
+    snap = read_grid_snapshot(tmp_path / "s.h5")
+    assert snap.time == 0.125
+    np.testing.assert_array_equal(snap.origin, [1.0, 2.0])
+    np.testing.assert_array_equal(snap.spacing, [0.5, 0.25])
+    for name, array in fields.items():
+        np.testing.assert_array_equal(snap.fields[name], array)
+
+
+# -------------------------------------------------------------------------------------------- particles
+def test_particle_series_2d_with_active_mask(tmp_path):
+    rng = np.random.default_rng(1)
+    capacity, times = 9, [0.0, 5e-5]
+    active = [rng.random(capacity) < 0.6, np.ones(capacity, dtype=bool)]
+    written, entries, kinds = [], [], None
+    for n, (t, mask) in enumerate(zip(times, active)):
+        xy = rng.uniform(-1.0, 1.0, (capacity, 2))
+        s = rng.normal(size=(capacity, 2, 2))
+        fields = {"mass": 1.0 + xy[:, 0] ** 2, "velocity": 3.0 * xy[:, ::-1], "stress": s + s.transpose(0, 2, 1)}
+        kinds = write_particle_snapshot(tmp_path / f"p_{n}.h5", t, xy, fields, active=mask)
+        entries.append((f"p_{n}.h5", t, int(mask.sum())))
+        written.append((xy[mask], {k: v[mask] for k, v in fields.items()}))
+    assert kinds == {"mass": "scalar", "velocity": "vector", "stress": "tensor"}
+    write_particle_series(tmp_path / "particles.xdmf", entries, kinds)
+    series = Series(tmp_path / "particles.xdmf")
+    assert series.times == times
+    for t, (xy, fields) in zip(times, written):
+        cloud = series.at(t)
+        assert cloud.GetNumberOfPoints() == len(xy)
+        points = vtk_to_numpy(cloud.GetPoints().GetData())
+        np.testing.assert_array_equal(points, np.pad(xy, ((0, 0), (0, 1))))
+        np.testing.assert_array_equal(cloud.GetBounds(), [*sum(((lo, hi) for lo, hi in zip(xy.min(0), xy.max(0))),
+                                                                  ()), 0.0, 0.0])
+        data = cloud.GetPointData()
+        assert data.GetArray("mass").GetDataType() == VTK_DOUBLE
+        np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("mass")), fields["mass"])
+        np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("velocity")),
+                                      np.pad(fields["velocity"], ((0, 0), (0, 1))))
+        stress = vtk_to_numpy(data.GetArray("stress")).reshape(-1, 3, 3)
+        np.testing.assert_array_equal(stress[:, :2, :2], fields["stress"])
+        assert np.all(stress[:, 2, :] == 0.0) and np.all(stress[:, :, 2] == 0.0)
+    snap = read_particle_snapshot(tmp_path / "p_0.h5")
+    np.testing.assert_array_equal(snap.positions, written[0][0])
+    for name, array in written[0][1].items():
+        np.testing.assert_array_equal(snap.fields[name], array)
+
+
+def test_particles_3d_full_tensor(tmp_path):
+    rng = np.random.default_rng(2)
+    xyz = rng.uniform(0.0, 2.0, (5, 3))
+    stress = rng.normal(size=(5, 3, 3))
+    kinds = write_particle_snapshot(tmp_path / "p.h5", 1.5, xyz, {"stress": stress})
+    write_particle_series(tmp_path / "p.xdmf", [("p.h5", 1.5, 5)], kinds)
+    cloud = Series(tmp_path / "p.xdmf").at(1.5)
+    np.testing.assert_array_equal(vtk_to_numpy(cloud.GetPoints().GetData()), xyz)
+    np.testing.assert_array_equal(vtk_to_numpy(cloud.GetPointData().GetArray("stress")), stress.reshape(5, 9))
+
+
+# ------------------------------------------------------------------------------------------- bad input
+@pytest.mark.parametrize("call, message", [
+    (lambda d: write_grid_snapshot(d / "a.h5", 0.0, (0.0, 0.0), 0.0, {"p": np.zeros((2, 2))}), "spacing"),
+    (lambda d: write_grid_snapshot(d / "a.h5", 0.0, (0, 0, 0, 0), 1.0, {"p": np.zeros(2)}), "origin"),
+    (lambda d: write_grid_snapshot(d / "a.h5", 0.0, (0.0, 0.0), 1.0, {"p": np.zeros((2, 2)), "q": np.zeros((2, 3))}),
+     "'q'"),
+    (lambda d: write_grid_snapshot(d / "a.h5", 0.0, (0.0, 0.0), 1.0, {"v": np.zeros((2, 2, 4))}), "'v'"),
+    (lambda d: write_grid_snapshot(d / "a.h5", 0.0, (0.0,), 1.0, {"a/b": np.zeros(2)}), "field name"),
+    (lambda d: write_grid_snapshot(d / "a.h5", np.nan, (0.0,), 1.0, {"p": np.zeros(2)}), "time"),
+    (lambda d: write_grid_snapshot(d / "a.h5", 0.0, (0.0,), 1.0, {"p": np.zeros(2)}, precision=2), "precision"),
+    (lambda d: write_grid_series(d / "a.xdmf", [("a.h5", 0.0)], (2, 2, 2), (0.0, 0.0), 1.0, {"p": "scalar"}),
+     "shape"),
+    (lambda d: write_grid_series(d / "a.xdmf", [("a.h5", 0.0)], (2,), (0.0,), 1.0, {"p": "matrix"}), "kind"),
+    (lambda d: write_grid_series(d / "a.xdmf", [("a.h5", 1.0), ("b.h5", 1.0)], (2,), (0.0,), 1.0,
+                                 {"p": "scalar"}), "strictly increasing"),
+    (lambda d: write_grid_series(d / "a.xdmf", [(str(d / "a.h5"), 0.0)], (2,), (0.0,), 1.0, {"p": "scalar"}),
+     "relative"),
+    (lambda d: write_particle_snapshot(d / "a.h5", 0.0, np.zeros((3, 4)), {}), "positions"),
+    (lambda d: write_particle_snapshot(d / "a.h5", 0.0, np.zeros((3, 2)), {}, active=np.zeros(3, bool)),
+     "at least one"),
+    (lambda d: write_particle_snapshot(d / "a.h5", 0.0, np.zeros((3, 2)), {}, active=np.ones(2, bool)), "active"),
+    (lambda d: write_particle_snapshot(d / "a.h5", 0.0, np.zeros((3, 2)), {"coordinates": np.zeros(3)}),
+     "field name"),
+    (lambda d: write_particle_series(d / "a.xdmf", [("a.h5", 0.0, 0)], {}), "particle"),
+])
+def test_bad_input_names_the_parameter(tmp_path, call, message):
+    with pytest.raises(ValueError, match=message):
+        call(tmp_path)
+
+
+# --------------------------------------------------------------------------------------------- plotting
+def test_field_image_orientation_and_mid_plane():
+    origin, spacing = (1.0, -2.0, 0.0), (0.5, 0.25, 0.1)
+    x, y, z = cell_centres(origin, spacing, (4, 3, 6))
+    image, extent, z_plane = field_image(origin, spacing, 2.0 * x + 3.0 * y + 5.0 * z)
+    assert image.shape == (3, 4)  # rows = y, columns = x
+    assert extent == (1.0, 3.0, -2.0, -1.25)
+    assert z_plane == pytest.approx(0.3, rel=1e-15)
+    # linear in z: the mean of the two layers around the mid-plane is the value on it, exactly
+    np.testing.assert_allclose(image, (2.0 * x + 3.0 * y)[:, :, 0].T + 5.0 * 0.3, **TOL)
+    odd, _, z_odd = field_image(origin, spacing, z[:, :, :5])
+    assert z_odd == pytest.approx(0.25, rel=1e-15)
+    np.testing.assert_allclose(odd, 0.25, **TOL)
+    flat, extent2d, none = field_image((0.0, 0.0), 1.0, x[:, :, 0])
+    assert none is None and extent2d == (0.0, 4.0, 0.0, 3.0)
+    np.testing.assert_array_equal(flat[1], x[:, 0, 0])  # a row runs along x
+
+
+@pytest.mark.parametrize("shape", [(40,), (30, 20), (12, 10, 8)])
+def test_plot_pressure_field_writes_png(tmp_path, shape):
+    origin = (0.0, 0.0, 0.0)[:len(shape)]
+    centres = cell_centres(origin, (0.1,) * len(shape), shape)
+    pressure = 1e5 * (1.0 + np.exp(-sum((c - 1.0) ** 2 for c in centres)))
+    png = tmp_path / "p.png"
+    plot_pressure_field(png, origin, 0.1, pressure, title="test")
+    picture = mpimg.imread(png)
+    assert picture.ndim == 3 and picture.shape[0] > 300 and picture.shape[1] > 400
+    colours = np.unique(picture[..., :3].reshape(-1, 3), axis=0)
+    assert len(colours) > (10 if len(shape) == 1 else 100)  # a curve / a colour map, not a blank canvas
