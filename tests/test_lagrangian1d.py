@@ -1,17 +1,27 @@
 """Tiers 1-2 for the vNR solver: jump conditions, invariants, ensembles, faults."""
 from pathlib import Path
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from blastfsi import simulation
+from blastfsi import simulation, timeloop
 from blastfsi.exact import shock
 from blastfsi.io.results import read_checkpoint
 from blastfsi.lagrangian1d import scheme
 from conftest import P0, RHO0, uniform_data
 
 NO_GAUGES = scheme.Gauges(jnp.zeros((0,)), jnp.asarray(P0))
+NUM = scheme.Numerics(*map(jnp.asarray, (1.4, 1.5, 0.1, 0.5)))
+BC = scheme.Boundaries(*map(jnp.asarray, (0.0, P0, 0.0, P0)))
+PARAMS = scheme.Params(NUM, BC, NO_GAUGES, jnp.asarray(1.0))
+WALLS = scheme.Static(left_velocity_set=True, right_fixed=False)
+
+
+def gas_at_rest(n):
+    x = jnp.linspace(0.0, 1.0, n + 1)
+    return x, scheme.initial_state(x, jnp.zeros(n + 1), jnp.full(n, P0 / (0.4 * RHO0)), jnp.full(n, RHO0 / n), 1.4, 4)
 
 
 def wall_run(ratio, cells=400, length=2.0, **over):
@@ -46,12 +56,8 @@ def test_energy_budget_closes_and_converges_with_the_time_step():
 
 
 def test_gas_at_rest_stays_at_rest():
-    n = 50
-    x = jnp.linspace(0.0, 1.0, n + 1)
-    st = scheme.initial_state(x, jnp.zeros(n + 1), jnp.full(n, P0 / (0.4 * RHO0)), jnp.full(n, RHO0 / n), 4)
-    num = scheme.Numerics(*map(jnp.asarray, (1.4, 1.5, 0.1, 0.5)))
-    bc = scheme.Boundaries(*map(jnp.asarray, (0.0, P0, 0.0, P0)))
-    out = scheme.advance(st, 1e-3, 10_000, 1e-3 / 3, 0.0, 1.0, num, bc, NO_GAUGES, True, False)
+    x, st = gas_at_rest(50)
+    out = scheme.advance(st, PARAMS, WALLS, 1e-3, 10_000, 1e-3 / 3, 1e-6)
     assert int(out.step) > 10  # at rest up to round-off of the unequal linspace spacings
     np.testing.assert_allclose(np.asarray(out.x), np.asarray(x), rtol=0, atol=1e-14)
     np.testing.assert_allclose(np.asarray(out.e), np.asarray(st.e), rtol=1e-13)
@@ -59,26 +65,24 @@ def test_gas_at_rest_stays_at_rest():
 
 
 def test_first_fault_locates_the_bad_zone():
-    n = 20
-    x = jnp.linspace(0.0, 1.0, n + 1)
-    st = scheme.initial_state(x, jnp.zeros(n + 1), jnp.full(n, P0 / (0.4 * RHO0)), jnp.full(n, RHO0 / n), 4)
+    x, st = gas_at_rest(20)
     assert int(scheme.first_fault(st)) == -1
     assert int(scheme.first_fault(st._replace(e=st.e.at[7].set(-1.0)))) == 7
     assert int(scheme.first_fault(st._replace(e=st.e.at[3].set(jnp.nan)))) == 3
     assert int(scheme.first_fault(st._replace(x=st.x.at[12].set(0.5)))) == 11  # tangled: x_12 < x_11
-    # advance refuses to step from a non-physical state and flags it
-    num = scheme.Numerics(*map(jnp.asarray, (1.4, 1.5, 0.1, 0.5)))
-    bc = scheme.Boundaries(*map(jnp.asarray, (0.0, P0, 0.0, P0)))
-    for bad in (st._replace(e=st.e.at[7].set(-1.0)), st._replace(x=st.x.at[12].set(0.5))):
-        out = scheme.advance(bad, 1e-3, 100, 1e-3 / 3, 0.0, 1.0, num, bc, NO_GAUGES, True, False)
-        assert bool(out.faulted) and int(out.step) == 0
+    # advance refuses to step from a non-physical state and flags it (the sound speed, like e, is NaN)
+    bad_e = st._replace(e=st.e.at[7].set(-1.0), a=st.a.at[7].set(jnp.nan))
+    for bad in (bad_e, st._replace(x=st.x.at[12].set(0.5))):
+        out = scheme.advance(bad, PARAMS, WALLS, 1e-3, 100, 1e-3 / 3, 1e-6)
+        assert int(out.fault) == timeloop.FAULT_NONPHYSICAL and int(out.step) == 0
 
 
 def test_driver_reports_time_step_location(tmp_path):
     # no artificial viscosity and alpha = 1: the captured shock rings until an
-    # energy goes negative, well after the first checkpoints
+    # energy goes negative, well after the first checkpoints (the zone being
+    # crushed first collapses the time step: that check is switched off here)
     data = uniform_data(numerics={"K1": 0.0, "K2": 0.0, "cfl": 1.0}, grid__cells=200, time__end=2 / 700,
-                        output__checkpoint_interval=2e-4)
+                        output__checkpoint_interval=2e-4, time__dt_min_fraction=0.0)
     with pytest.raises(simulation.SimulationError) as err:
         simulation.run(data, tmp_path / "r")
     msg = str(err.value)
@@ -86,7 +90,7 @@ def test_driver_reports_time_step_location(tmp_path):
     t_fault = float(msg.split("t = ")[1].split()[0])
     ckpt = Path(msg.split("last checkpoint: ")[1])
     leaves, meta = read_checkpoint(ckpt)  # the last checkpoint is intact and earlier than the fault
-    assert meta["time"] < t_fault and not leaves["faulted"].any()
+    assert meta["time"] < t_fault and not leaves["fault"].any()
     assert np.all(np.diff(leaves["x"][0]) > 0) and np.all(leaves["e"] > 0)
 
 
@@ -103,12 +107,15 @@ def test_ensemble_equals_individual_runs():
 
 
 def test_compiled_once_for_a_whole_run():
-    data = uniform_data(grid__cells=150, output__fields=5)
-    fn = simulation.batched_advance(True, False)
-    simulation.run(data, chunk_steps=50)  # many chunks and stops
-    size = fn._cache_size()
-    simulation.run(uniform_data(grid__cells=150, output__fields=5, plate__beta_s=3.0), chunk_steps=50)
-    assert fn._cache_size() == size
+    compiles = []
+    jax.monitoring.register_event_duration_secs_listener(
+        lambda event, secs, **kw: compiles.append(event) if event == "/jax/core/compile/backend_compile_duration"
+        else None)
+    first = simulation.run(uniform_data(grid__cells=150, output__fields=5), chunk_steps=50)  # many chunks and stops
+    assert first.summary["compile_time"] > 0.0 and first.summary["steps"] > 10 * 50
+    compiles.clear()
+    again = simulation.run(uniform_data(grid__cells=150, output__fields=5, plate__beta_s=3.0), chunk_steps=50)
+    assert again.summary["compile_time"] == 0.0 and compiles == []  # nothing compiled for the same shapes
 
 
 def test_plate_matches_quasi_steady_theory():
@@ -151,10 +158,12 @@ def test_gauges_see_the_incident_shock_and_its_impulse():
     s = shock.incident_shock(ps, P0, RHO0)
     t_end = 2.0 / s.shock_speed + 1e-5  # just after arrival at the wall: no reflection back at the gauges
     res = simulation.run(uniform_data(plate__beta_s=None, plate__fixed=True, grid__cells=800, time__end=t_end,
-                                      output__fields=0, output__gauges=[1.5, 1.8, 2.5]))
+                                      output__fields=0, output__gauges=[1.5, 1.8, 0.5]))
     summ, hist = res.summary, res.histories[0]
-    assert np.all(np.isnan(hist["gauge2_overpressure"]))  # beyond the wall: outside the gas
-    assert summ["gauge_peak_overpressure"][2] is None and summ["gauge_impulse"][2] == 0.0
+    # the piston (at u_p) passes the gauge at 0.5 m: from then on it lies outside the gas
+    passed = hist["time"] > 0.5 / s.particle_velocity
+    assert np.all(np.isnan(hist["gauge2_overpressure"][passed])) and np.all(np.isfinite(
+        hist["gauge2_overpressure"][~passed]))
     for k, x in enumerate((1.5, 1.8)):
         late = hist["time"] > x / s.shock_speed + 2e-4
         np.testing.assert_allclose(hist[f"gauge{k}_overpressure"][late], ps, rtol=2e-3)

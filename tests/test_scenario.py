@@ -6,7 +6,7 @@ import sys
 import pytest
 import tomli_w
 
-from blastfsi.scenario import ScenarioError, parse
+from blastfsi.scenario import ScenarioError, parse, read_toml
 from conftest import uniform_data
 
 # (override, expected fragments of the message)
@@ -73,3 +73,54 @@ def test_sweep_members_are_the_cartesian_product():
     sc = parse(data)
     assert len(sc.members()) == 6
     assert json.dumps(sc.members()[0]) == json.dumps({"incident.overpressure": 1e4, "plate.beta_s": 0.1})
+
+
+# Issue 5: strict types (no string-to-bool, string-to-number, float-to-int), safe names,
+# gauges inside the domain, the time-step floor's range, the method key.
+STRICT = [
+    ({"plate__beta_s": None, "plate__fixed": "yes"}, ["plate.fixed", "boolean", "'yes'"]),
+    ({"grid__cells": 100.5}, ["grid.cells", "integer", "100.5"]),
+    ({"grid__cells": 100.0}, ["grid.cells", "integer", "100.0"]),
+    ({"grid__cells": True}, ["grid.cells", "integer"]),
+    ({"domain__length": "8"}, ["domain.length", "number", "'8'"]),
+    ({"incident__overpressure": "4e5"}, ["incident.overpressure", "number"]),
+    ({"name": "../../x"}, ["name", "letters, digits", "'../../x'"]),
+    ({"name": ".hidden"}, ["name", "not start with '.'"]),
+    ({"name": "a/b"}, ["name", "'a/b'"]),
+    ({"output__gauges": [1.0, 2.5]}, ["output.gauges[1] = 2.5 m lies outside the domain (x in [0, 2] m)"]),
+    ({"output__gauges": [-0.1]}, ["output.gauges[0] = -0.1 m lies outside the domain (x in [0, 2] m)"]),
+    ({"output__gauges": [[1.0, 0.5]]}, ["output.gauges[0]", "expected 1 coordinate"]),
+    ({"output__gauges": ["1.0"]}, ["output.gauges[0]", "'1.0'"]),
+    ({"time__dt_min_fraction": 1.0}, ["time.dt_min_fraction", "< 1"]),
+    ({"time__dt_min_fraction": -1e-3}, ["time.dt_min_fraction", ">= 0"]),
+    ({"method": "nope"}, ["method", "unknown method 'nope'", "lagrangian1d"]),
+]
+
+
+@pytest.mark.parametrize("override,fragments", STRICT)
+def test_strict_types_safe_names_and_gauges(override, fragments):
+    with pytest.raises(ScenarioError) as err:
+        parse(uniform_data(**override))
+    for frag in fragments:
+        assert frag in str(err.value)
+
+
+def test_integers_for_float_keys_and_safe_names_are_accepted(tmp_path):
+    f = tmp_path / "ints.toml"
+    f.write_text(tomli_w.dumps(uniform_data(name="case-1_b.2", domain__length=2, time__end=1,
+                                            output__gauges=[0, 2])))
+    sc = parse(read_toml(f))
+    assert sc.method == "lagrangian1d" and sc.name == "case-1_b.2"
+    assert isinstance(sc.time.end, float) and sc.time.end == 1.0 and isinstance(sc.domain.length, float)
+    assert sc.output.gauges == [0.0, 2.0] and sc.time.dt_min_fraction == 1e-6
+
+
+def test_cli_refuses_an_escaping_name_before_writing_anything(tmp_path, monkeypatch, capsys):
+    from blastfsi import cli
+
+    monkeypatch.chdir(tmp_path)
+    f = tmp_path / "evil.toml"
+    f.write_text(tomli_w.dumps(uniform_data(name="../../escaped")))
+    assert cli.main(["run", str(f)]) == cli.EXIT_SCENARIO
+    assert "name" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["evil.toml"] and not (tmp_path.parent / "escaped").exists()

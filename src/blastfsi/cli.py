@@ -1,33 +1,17 @@
-"""Command line: ``blastfsi run``, ``blastfsi examples``."""
+"""Command line: ``blastfsi run``, ``blastfsi examples`` (a thin layer over :mod:`blastfsi.api`)."""
 from __future__ import annotations
 
 import argparse
 import json
 import sys
-import tomllib
-from importlib import resources
 from pathlib import Path
 
+from blastfsi import api
+from blastfsi.api import example_data, example_names
 from blastfsi.io.results import OutputError
-from blastfsi.scenario import ScenarioError, apply_overrides, read_toml
+from blastfsi.scenario import ScenarioError, apply_overrides, parse, read_toml
 
 EXIT_SCENARIO, EXIT_SIMULATION, EXIT_OUTPUT = 2, 3, 4
-
-
-def example_names() -> dict[str, str]:
-    """Shipped example name -> its one-line description."""
-    out = {}
-    for f in sorted(resources.files("blastfsi.examples").iterdir(), key=lambda p: p.name):
-        if f.name.endswith(".toml"):
-            out[f.name[:-5]] = tomllib.loads(f.read_text()).get("description", "")
-    return out
-
-
-def example_data(name: str) -> dict:
-    names = example_names()
-    if name not in names:
-        raise ScenarioError(f"unknown example {name!r}; available: {', '.join(names)}")
-    return tomllib.loads(resources.files("blastfsi.examples").joinpath(f"{name}.toml").read_text())
 
 
 def _default_out(name: str) -> Path:
@@ -73,27 +57,21 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args) -> int:
-    from blastfsi import simulation
+    from blastfsi.simulation import SimulationError
 
-    if args.restart:
-        out = Path(args.restart)
-        if args.overrides:
-            raise ScenarioError("--restart continues a run as it was; --set is not allowed")
-        if not (out / "scenario.toml").is_file():
-            raise OutputError(f"--restart: {out} holds no scenario.toml")
-        data = read_toml(out / "scenario.toml")
-    else:
-        if args.example:
-            data = example_data(args.example)
-        else:
-            data = read_toml(args.scenario)
-        data = apply_overrides(data, args.overrides)
-        name = str(data.get("name", "run"))
-        out = Path(args.out) if args.out else _default_out(name)
     progress = sys.stderr.isatty() and not args.json
     try:
-        res = simulation.run(data, out, overwrite=args.overwrite, progress=progress, restart=bool(args.restart))
-    except simulation.SimulationError as err:
+        if args.restart:
+            if args.overrides:
+                raise ScenarioError("--restart continues a run as it was; --set is not allowed")
+            out = Path(args.restart)
+            res = api.restart(out, progress=progress)
+        else:
+            data = example_data(args.example) if args.example else read_toml(args.scenario)
+            data = apply_overrides(data, args.overrides)
+            out = Path(args.out) if args.out else _default_out(parse(data).name)
+            res = api.run(data, out=out, overwrite=args.overwrite, progress=progress)
+    except SimulationError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_SIMULATION
     summary = res.summary

@@ -1,41 +1,50 @@
-"""The driver: builds the batched initial state, advances it in compiled chunks,
-and schedules field output, checkpoints, progress and the summary.
+"""The driver, one for every method: it only schedules.
 
-Physics lives in :mod:`blastfsi.lagrangian1d.scheme`; this module only schedules.
-Every run is an ensemble (batch of size >= 1) advanced by one vmapped,
-jitted ``advance``: a sweep of plate masses or intensities is one call.
+A run is an ensemble (batch of size >= 1) of one method's members, advanced by
+one vmapped, jitted ``advance`` (:mod:`blastfsi.method` describes the face the
+driver calls). The driver compiles it once per method, static configuration
+and array shapes (timed as ``compile_time``), and advances the batch in chunks
+of steps between the stop times of the output schedule: field snapshots,
+checkpoints (any NamedTuple state, saved and restored leaf by leaf under its
+field names: restart is bit for bit) and the end. Between chunks it updates
+the progress bar and turns a fault flag into an error naming the time, step,
+location and last checkpoint. At the end it writes histories, the summary and
+plots into the results directory.
 """
 from __future__ import annotations
 
-import functools
+import re
 import time as wallclock
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from blastfsi.eos import ideal_gas
+from blastfsi import method as methods
 from blastfsi.io import results
-from blastfsi.lagrangian1d import scheme
-from blastfsi.problems import plate1d
-from blastfsi.scenario import Scenario, ScenarioError, member_scenario, parse
+from blastfsi.scenario import ScenarioBase, ScenarioError, expand, parse  # noqa: F401  (parse: for scripts)
+from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_NONE
 
 
 class SimulationError(RuntimeError):
-    """A run stopped on a non-physical state or an exhausted step budget."""
+    """A run stopped on a fault (non-physical state, collapsed time step) or an exhausted step budget."""
 
 
 @dataclass
-class RunResult:
-    scenario: Scenario
+class Result:
+    """What a run gives back (also the Python API's result, :func:`blastfsi.run`)."""
+
+    scenario: ScenarioBase
     members: list[dict]  # the sweep overrides of each member
-    setups: list[plate1d.Setup]
+    setups: list  # per member, the method's host-side set-up
     summaries: list[dict]
     histories: list[dict]  # column name -> array, per member
-    state: scheme.State  # final batched state
+    state: tuple  # final batched state (device arrays)
     out_dir: Path | None
+    method: methods.Method = field(repr=False)
+    snapshots: list[tuple[int, float]] = field(default_factory=list)  # (index, time) written under out_dir/fields
 
     @property
     def summary(self) -> dict:
@@ -47,35 +56,72 @@ class RunResult:
         out["members"] = self.members
         return out
 
+    @property
+    def history(self) -> dict | list[dict]:
+        """Column name -> samples (one member), or the list over members."""
+        return self._one_or_list(self.histories)
 
-@functools.lru_cache(maxsize=None)
-def batched_advance(left_velocity_set: bool, right_fixed: bool):
-    """jit(vmap(advance)) for one boundary configuration; compiled once per shapes."""
-    def one(state, t_stop, max_steps, sample_interval, e0, x_right0, num, bc, gauges):
-        return scheme.advance(state, t_stop, max_steps, sample_interval, e0, x_right0, num, bc, gauges,
-                              left_velocity_set, right_fixed)
+    @property
+    def gauges(self) -> dict | list[dict]:
+        """Gauge histories: ``time`` (n,), ``position`` (G,) or (G, ndim), and per
+        quantity an array (n, G) from the history columns gauge<k>_<quantity>."""
+        position = np.asarray(self.scenario.output.gauges, float)
+        return self._one_or_list([_gauge_histories(h, position) for h in self.histories])
 
-    vm = jax.vmap(one, in_axes=(0, None, None, None, 0, 0, 0, 0, None))
-    return jax.jit(vm, donate_argnums=(0,))
+    def fields(self, time: float | None = None) -> dict | list[dict]:
+        """Field arrays (NumPy) of the final state (``time=None``, from memory) or
+        of the snapshot at ``time`` (read back from the results directory); see
+        ``as_fields`` of :data:`blastfsi.method.Snapshot`. Ensembles: a list per member."""
+        finals = _members(self.state)
+        if time is None or (self.out_dir is None and time == float(np.min(np.asarray(self.state.t)))):
+            return self._one_or_list([self.method.snapshot(s, setup).as_fields()
+                                      for s, setup in zip(finals, self.setups)])
+        if self.out_dir is None:
+            raise ValueError("fields(time=...) reads the snapshots of a results directory, and this run was made "
+                             "with out=None; only the final state (fields()) is kept in memory")
+        tol = 1e-9 * self.scenario.time.end
+        match = [i for i, t in self.snapshots if abs(t - time) <= tol]
+        if not match:
+            raise ValueError(f"no field snapshot at time {time!r} s; available: {[t for _, t in self.snapshots]}")
+        kind = self.method.snapshot(finals[0], self.setups[0]).kind
+        return self._one_or_list([results.read_snapshot(self.out_dir, kind, match[0], k).as_fields()
+                                  for k in range(len(self.setups))])
+
+    def _one_or_list(self, items: list):
+        return items[0] if len(items) == 1 else items
 
 
-def _stack(setups: list[plate1d.Setup], n_samples: int, n_gauges: int, dtype):
-    def arr(values):
-        return jnp.asarray(np.stack(values), dtype=dtype)
-
-    states = [scheme.initial_state(jnp.asarray(s.x, dtype), jnp.asarray(s.v, dtype), jnp.asarray(s.e, dtype),
-                                   jnp.asarray(s.zone_mass, dtype), n_samples, n_gauges) for s in setups]
-    state = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *states)
-    num = scheme.Numerics(*[arr([s.numerics[i] for s in setups]) for i in range(4)])
-    bc = scheme.Boundaries(*[arr([s.boundaries[i] for s in setups]) for i in range(4)])
-    e0 = jax.vmap(scheme.total_energy)(state, bc)
-    x_right0 = arr([s.x[-1] for s in setups])
-    return state, num, bc, e0, x_right0
+def _gauge_histories(hist: dict, position: np.ndarray) -> dict:
+    matches = [m for m in (re.fullmatch(r"gauge(\d+)_(.+)", c) for c in hist) if m]
+    out = {"time": hist["time"], "position": position}
+    for quantity in dict.fromkeys(m.group(2) for m in matches):
+        out[quantity] = np.stack([hist[f"gauge{k}_{quantity}"] for k in range(len(position))], axis=1)
+    return out
 
 
-def stop_times(sc: Scenario) -> tuple[list[float], list[float], list[float]]:
+def _members(state) -> list:
+    """The batched state as one NumPy state per member."""
+    host = jax.device_get(state)
+    n = np.shape(host.t)[0]
+    return [jax.tree_util.tree_map(lambda leaf: leaf[k], host) for k in range(n)]
+
+
+def _stack(trees: list, what: str):
+    """Stack per-member pytrees along a new leading axis; members must agree in structure and shapes."""
+    ref = jax.tree_util.tree_flatten_with_path(trees[0])[0]
+    for k, tree in enumerate(trees[1:], start=1):
+        for (path, a), (_, b) in zip(ref, jax.tree_util.tree_flatten_with_path(tree)[0]):
+            if np.shape(a) != np.shape(b):
+                raise ScenarioError(f"ensemble members must share array shapes (e.g. the grid): {what} "
+                                    f"{jax.tree_util.keystr(path)} is {np.shape(a)} in member 0 but {np.shape(b)} "
+                                    f"in member {k}")
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *trees)
+
+
+def stop_times(sc: ScenarioBase) -> tuple[list[float], list[float], list[float]]:
+    """(field snapshot times, checkpoint times, all stop times) of the output schedule."""
     end = sc.time.end
-    fields = list(np.linspace(0.0, end, sc.output.fields)) if sc.output.fields >= 2 else (
+    fields = [float(t) for t in np.linspace(0.0, end, sc.output.fields)] if sc.output.fields >= 2 else (
         [end] if sc.output.fields == 1 else [])
     ckpt = []
     if sc.output.checkpoint_interval is not None:
@@ -84,51 +130,64 @@ def stop_times(sc: Scenario) -> tuple[list[float], list[float], list[float]]:
     return fields, ckpt, sorted(set(fields) | set(ckpt) | {end})
 
 
-def _fields_of(state: scheme.State, k: int, gamma: float) -> dict:
-    x = np.asarray(state.x[k])
-    m = np.asarray(state.zone_mass[k])
-    e = np.asarray(state.e[k])
-    q = np.asarray(state.q[k])
-    rho = m / np.diff(x)
-    return {"x": x, "velocity": np.asarray(state.v[k]), "density": rho,
-            "pressure": ideal_gas.pressure(rho, e, gamma) + q, "internal_energy": e, "viscous_pressure": q}
+_EXECUTABLES: dict = {}  # (method, static, argument types) -> compiled jit(vmap(advance))
 
 
-NODE_FIELDS = ("velocity",)
-ZONE_FIELDS = ("density", "pressure", "internal_energy", "viscous_pressure")
+def compiled_advance(method: methods.Method, static, state, params, *scalars):
+    """The compiled batched ``advance`` for these argument types, and the
+    seconds spent compiling it now (0 when it was compiled before)."""
+    leaves, tree = jax.tree_util.tree_flatten((state, params))
+    key = (method.name, static, tree, tuple(jax.typeof(x) for x in leaves), tuple(type(s) for s in scalars))
+    if key in _EXECUTABLES:
+        return _EXECUTABLES[key], 0.0
+
+    def one(st, pa, t_stop, max_steps, sample_interval, dt_floor_fraction):
+        return method.advance(st, pa, static, t_stop, max_steps, sample_interval, dt_floor_fraction)
+
+    batched = jax.jit(jax.vmap(one, in_axes=(0, 0, None, None, None, None)), donate_argnums=(0,))
+    started = wallclock.perf_counter()
+    _EXECUTABLES[key] = batched.lower(state, params, *scalars).compile()
+    return _EXECUTABLES[key], wallclock.perf_counter() - started
 
 
-def _prepare(data: dict | list[dict]):
-    """A scenario with an optional sweep, or a list of sweep-free scenarios that
-    share grid.cells, time and output settings (e.g. different domain lengths),
-    as (first scenario, member overrides, setups)."""
-    if isinstance(data, list):
-        scs = [parse(d) for d in data]
-        for key in ("grid", "time", "output"):
-            if any(getattr(s, key) != getattr(scs[0], key) for s in scs):
-                raise ScenarioError(f"a batch of scenarios must share its [{key}] table")
-        return scs[0], [{"member": k} for k in range(len(scs))], [plate1d.build(s) for s in scs]
-    sc = parse(data)
-    members = sc.members()
-    member_scs = [member_scenario(data, m) if m else sc for m in members]
-    return sc, members, [plate1d.build(s) for s in member_scs]
+def _leaf_names(tree) -> list[tuple[str, object]]:
+    return [(jax.tree_util.keystr(p).lstrip("."), leaf) for p, leaf in jax.tree_util.tree_flatten_with_path(tree)[0]]
+
+
+def _restore(file: Path, fresh):
+    """The state saved in checkpoint ``file``, checked against the freshly built one."""
+    saved, _ = results.read_checkpoint(file)
+    names = _leaf_names(fresh)
+    if sorted(saved) != sorted(n for n, _ in names):
+        raise results.OutputError(f"{file}: checkpoint fields {sorted(saved)} do not match this scenario's state "
+                                  f"{[n for n, _ in names]}")
+    for n, leaf in names:
+        if saved[n].shape != leaf.shape or saved[n].dtype != leaf.dtype:
+            raise results.OutputError(f"{file}: {n} is {saved[n].dtype}{list(saved[n].shape)}, this scenario "
+                                      f"needs {leaf.dtype}{list(leaf.shape)}")
+    return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(fresh), [jnp.asarray(saved[n]) for n, _ in names])
 
 
 def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
-        restart: bool = False, chunk_steps: int = 20_000) -> RunResult:
-    """Run a scenario given as a raw dict (or a list of them, see ``_prepare``)
-    as one batched computation. With ``restart``, ``out`` is an existing
-    results directory whose scenario and latest checkpoint are used."""
-    sc, members, setups = _prepare(data)
+        restart: bool = False, chunk_steps: int = 20_000) -> Result:
+    """Run a scenario given as a raw dict (or a list of them, see
+    :func:`blastfsi.scenario.expand`) as one batched computation. With
+    ``restart``, ``out`` is an existing results directory whose latest
+    checkpoint is continued; ``out=None`` writes nothing."""
+    sc, members, member_scs = expand(data)
+    method = methods.get(sc.method)
+    setups = [method.build(s) for s in member_scs]
     dtype = jnp.float32 if sc.numerics.precision == "float32" or not jax.config.jax_enable_x64 else jnp.float64
-    flags = {(s.left_velocity_set, s.right_fixed) for s in setups}
-    if len(flags) != 1:
-        raise ScenarioError("all ensemble members must share boundary kinds")
-    advance = batched_advance(*flags.pop())
+    statics = {method.static(setup, s) for setup, s in zip(setups, member_scs)}
+    if len(statics) != 1:
+        raise ScenarioError(f"all ensemble members must share the static configuration compiled into the time loop; "
+                            f"got {sorted(map(repr, statics))}")
+    static = statics.pop()
     n_samples = sc.output.history_samples
     sample_interval = sc.time.end / (n_samples - 1)
-    gauges = scheme.Gauges(jnp.asarray(sc.output.gauges, dtype).reshape(-1), jnp.asarray(sc.gas.pressure, dtype))
-    state, num, bc, e0, x_right0 = _stack(setups, n_samples, len(sc.output.gauges), dtype)
+    state = _stack([method.initial_state(setup, s, n_samples, dtype) for setup, s in zip(setups, member_scs)], "state")
+    methods.check_state(state)
+    params = _stack([method.params(setup, dtype) for setup in setups], "params")
     field_times, ckpt_times, stops = stop_times(sc)
 
     last_ckpt = None
@@ -136,51 +195,51 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         last_ckpt = results.latest_checkpoint(out)
         if last_ckpt is None:
             raise results.OutputError(f"--restart: no checkpoint in {out / 'checkpoints'}")
-        leaves, _ = results.read_checkpoint(last_ckpt)
-        state = scheme.State(**{k: jnp.asarray(leaves[k]) for k in scheme.State._fields})
-        e0 = jnp.asarray(leaves["energy0"])
+        state = _restore(last_ckpt, state)
     elif out is not None:
         results.prepare_directory(out, overwrite)
         results.write_scenario(out, sc)
-    snapshots = results.list_snapshots(out) if restart else []
     t_start = float(np.min(np.asarray(state.t)))
-    snapshots = [s for s in snapshots if s[1] <= t_start]
+    snapshots = [(i, t) for i, t in enumerate(field_times) if t <= t_start] if restart else []
+    scalars = (chunk_steps, sample_interval, sc.time.dt_min_fraction)
+    advance, compile_time = compiled_advance(method, static, state, params, stops[-1], *scalars)
 
     bar = _Progress(sc.time.end, enabled=progress)
     started = wallclock.perf_counter()
-    gamma = sc.gas.gamma
-    if out is not None and 0.0 in field_times and not restart:
-        results.write_snapshot(out, 0, 0.0, [_fields_of(state, k, gamma) for k in range(len(setups))])
-        snapshots.append((0, 0.0))
     try:
+        if out is not None and not restart and field_times and field_times[0] == 0.0:
+            results.write_snapshot(out, 0, 0.0, [method.snapshot(s, u) for s, u in zip(_members(state), setups)])
+            snapshots.append((0, 0.0))
         for t_stop in (t for t in stops if t > t_start):
             while np.any(np.asarray(state.t) < t_stop):
-                state = advance(state, t_stop, chunk_steps, sample_interval, e0, x_right0, num, bc, gauges)
-                _check(state, sc, last_ckpt)
+                state = advance(state, params, t_stop, *scalars)
+                _check(state, method, setups, sc, last_ckpt)
                 bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
                            float(np.min(np.asarray(state.dt_prev))))
             if out is None:
                 continue
             if t_stop in field_times:
                 index = field_times.index(t_stop)
-                results.write_snapshot(out, index, t_stop, [_fields_of(state, k, gamma) for k in range(len(setups))])
+                results.write_snapshot(out, index, t_stop,
+                                       [method.snapshot(s, u) for s, u in zip(_members(state), setups)])
                 snapshots.append((index, t_stop))
             if t_stop in ckpt_times:
-                ckpt_index = ckpt_times.index(t_stop) + 1
-                leaves = {k: np.asarray(v) for k, v in state._asdict().items()}
-                leaves["energy0"] = np.asarray(e0)
-                last_ckpt = results.write_checkpoint(out, ckpt_index, leaves, {"time": t_stop})
+                leaves = {n: np.asarray(leaf) for n, leaf in _leaf_names(state)}
+                last_ckpt = results.write_checkpoint(out, ckpt_times.index(t_stop) + 1, leaves,
+                                                     {"time": t_stop, "method": sc.method})
     finally:
         bar.close()
     wall = wallclock.perf_counter() - started
 
-    columns = scheme.history_columns(len(sc.output.gauges))
-    histories = [_history_dict(np.asarray(state.hist[k]), columns) for k in range(len(setups))]
-    energies = np.asarray(jax.vmap(scheme.total_energy)(state, bc))
-    summaries = [_summary(sc, setups[k], histories[k], state, float(energies[k]), k, wall) for k in range(len(setups))]
-    result = RunResult(sc, members, setups, summaries, histories, state, out)
+    finals = _members(state)
+    columns = method.history_columns(setups[0], sc)
+    histories = [_history_dict(s.hist, columns) for s in finals]
+    summaries = [{"method": sc.method, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
+                  "wall_time": wall, "compile_time": compile_time, **method.summary(msc, setup, hist, s)}
+                 for s, setup, msc, hist in zip(finals, setups, member_scs, histories)]
+    result = Result(sc, members, setups, summaries, histories, state, out, method, sorted(snapshots))
     if out is not None:
-        _write_outputs(out, result, snapshots)
+        _write_outputs(out, result, columns, finals)
     return result
 
 
@@ -189,94 +248,36 @@ def _history_dict(rows: np.ndarray, columns) -> dict:
     return {name: rows[:, i] for i, (name, _) in enumerate(columns)}
 
 
-def _check(state: scheme.State, sc: Scenario, last_ckpt) -> None:
+def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_ckpt) -> None:
     where = f"last checkpoint: {last_ckpt}" if last_ckpt else "no checkpoint written yet"
-    if np.any(np.asarray(state.faulted)):
-        k = int(np.argmax(np.asarray(state.faulted)))
-        member = jax.tree_util.tree_map(lambda leaf: np.asarray(leaf[k]), state)
-        zone = max(int(scheme.first_fault(member)), 0)
-        x = member.x
-        raise SimulationError(
-            f"non-physical state (NaN, tangled zone or non-positive internal energy) in member {k} at "
-            f"t = {float(state.t[k]):.9g} s, step {int(state.step[k])}: zone {zone} at x = "
-            f"{0.5 * (x[zone] + x[zone + 1]):.6g} m; {where}")
+    fault = np.asarray(state.fault)
+    if np.any(fault != FAULT_NONE):
+        k = int(np.argmax(fault != FAULT_NONE))
+        member = _members(state)[k]
+        location = method.locate_fault(member, setups[k])
+        if fault[k] == FAULT_DT_COLLAPSE:
+            what = (f"time step collapsed below time.dt_min_fraction x initial ({sc.time.dt_min_fraction:g} x "
+                    f"{float(member.dt0):.3g} s)")
+        else:
+            what = "non-physical state"
+        raise SimulationError(f"{what} in member {k} at t = {float(member.t):.9g} s, step {int(member.step)}: "
+                              f"{location}; {where}")
     if np.any(np.asarray(state.step) >= sc.time.max_steps):
         raise SimulationError(f"time.max_steps = {sc.time.max_steps} reached at t = {float(np.min(state.t)):.6g} s "
-                              f"(end {sc.time.end} s); raise time.max_steps or coarsen grid.cells; {where}")
+                              f"(end {sc.time.end} s); raise time.max_steps or coarsen the grid; {where}")
 
 
-def _summary(sc: Scenario, setup: plate1d.Setup, hist: dict, state, energy: float, k: int, wall: float) -> dict:
-    info = setup.info
-    fixed = sc.plate.fixed
-    v_plate = 0.0 if fixed else float(state.v[k, -1])
-    impulse = float(state.face_impulse[k]) if fixed else float(state.v[k, -1]) * info["plate_areal_mass"]
-    cr_theory = info.get("reflection_coefficient_theory")
-    incident_impulse = info.get("incident_impulse")
-    out = {
-        "plate_velocity": v_plate,
-        "plate_displacement": float(state.x[k, -1] - setup.x[-1]),
-        "plate_impulse": impulse,
-        "plate_impulse_max": float(np.max(hist["plate_impulse"])),
-        "peak_overpressure": _finite(state.peak_face_overpressure[k]),
-        "beta_s": info.get("beta_s"),
-        "reflection_coefficient_theory": cr_theory,
-        "impulse_ratio_theory": info.get("impulse_ratio_theory"),
-        "impulse_ratio": impulse / (cr_theory * incident_impulse) if cr_theory and incident_impulse else None,
-        "plate_areal_mass": info["plate_areal_mass"],
-        "time": float(state.t[k]),
-        "steps": int(state.step[k]),
-        "wall_time": wall,
-        "energy_error_relative": float(hist["energy_error"][-1]) / energy,
-    }
-    if sc.output.gauges:
-        out["gauge_positions"] = list(sc.output.gauges)
-        out["gauge_peak_overpressure"] = [_finite(v) for v in np.asarray(state.gauge_peak[k])]
-        out["gauge_impulse"] = [_finite(v) for v in np.asarray(state.gauge_impulse[k])]
-    if sc.incident.profile == "uniform":
-        out["reflection_coefficient"] = _measured_reflection(hist, info)
-        for key in ("arrival_time", "duration", "clean_duration", "f_R", "f_R_eq30", "free_surface_velocity"):
-            out[key] = info.get(key)
-        if info["duration"] > info["clean_duration"]:
-            out["warning"] = (f"waves re-reflected by the piston reach the plate {info['clean_duration']:.4g} s after "
-                              f"shock arrival, before the end of the run ({info['duration']:.4g} s after arrival); "
-                              "lengthen domain.length or shorten time.end")
-    if sc.incident.profile == "sedov":
-        out["explosion_time"] = info["explosion_time"]
-    return out
-
-
-def _finite(value):
-    """A float for JSON; None where nothing was measured (a gauge never inside the gas)."""
-    value = float(value)
-    return value if np.isfinite(value) else None
-
-
-def _measured_reflection(hist: dict, info: dict):
-    """Mean wall overpressure over the second half of the clean window, / p_s (002 Fig. 2)."""
-    window = min(info["duration"], info["clean_duration"])
-    t = hist["time"] - info["arrival_time"]
-    sel = (t >= 0.5 * window) & (t <= window)
-    if not np.any(sel):
-        return None
-    return float(np.mean(hist["plate_overpressure"][sel]) / info["incident_overpressure"])
-
-
-def _write_outputs(out: Path, res: RunResult, snapshots) -> None:
-    from blastfsi.plotting import gauge_histories, plate_histories
-
+def _write_outputs(out: Path, res: Result, columns, finals: list) -> None:
     many = len(res.setups) > 1
-    columns = scheme.history_columns(len(res.scenario.output.gauges))
     for k, hist in enumerate(res.histories):
         name = f"history_member{k}.csv" if many else "history.csv"
-        rows = np.stack([hist[n] for n, _ in columns], axis=1)
-        results.write_history(out / name, columns, rows)
-        if snapshots:
-            results.write_xdmf(out, k, sorted(snapshots), NODE_FIELDS, ZONE_FIELDS, res.setups[k].x.size)
+        results.write_history(out / name, columns, np.stack([hist[n] for n, _ in columns], axis=1))
+        if res.snapshots:
+            results.write_series(out, k, res.snapshots, res.method.snapshot(finals[k], res.setups[k]))
     results.write_summary(out, res.summary)
     if res.scenario.output.plots:
-        plate_histories(out / "plots" / "plate_histories.png", res.histories, res.members)
-        if res.scenario.output.gauges:
-            gauge_histories(out / "plots" / "gauges.png", res.histories, res.scenario.output.gauges)
+        res.method.plots(out / "plots", res.scenario, res.histories, res.members,
+                         [res.method.snapshot(f, u) for f, u in zip(finals, res.setups)])
 
 
 class _Progress:

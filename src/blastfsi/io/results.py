@@ -5,8 +5,9 @@ Layout::
     scenario.toml              the resolved scenario (defaults filled in)
     summary.json               the run's summary quantities
     history.csv                (history_member<k>.csv for ensembles) SI units in the header
-    fields/snap_<i>.h5         node/zone fields per snapshot, one group per member
-    fields/member<k>.xdmf      ParaView time series over the snapshots
+    fields/                    field snapshots, one FieldWriter per snapshot kind; open member<k>.xdmf
+                               in ParaView (a time series). 1D meshes: snap_<i>.h5 (one group per member);
+                               grids and particles (blastfsi.io.fields): member<k>_<i>.h5
     checkpoints/ckpt_<i>.h5    full solver state, for --restart
     plots/*.png
 """
@@ -16,10 +17,14 @@ import csv
 import json
 import re
 from pathlib import Path
+from typing import Protocol
 
 import h5py
 import numpy as np
 import tomli_w
+
+from blastfsi.io import fields
+from blastfsi.method import Grid, Particles, Polyline
 
 
 class OutputError(RuntimeError):
@@ -68,18 +73,146 @@ def snapshot_name(index: int) -> str:
     return f"snap_{index:04d}.h5"
 
 
-def write_snapshot(path: Path, index: int, time: float, members: list[dict]) -> None:
-    """One HDF5 file per snapshot: /member<k>/{coordinates, node/*, zone/*}, attribute time."""
-    with h5py.File(path / "fields" / snapshot_name(index), "w") as f:
-        f.attrs["time"] = time
-        for k, fields in enumerate(members):
-            grp = f.create_group(f"member{k}")
-            x = fields["x"]
-            grp.create_dataset("coordinates", data=np.stack([x, np.zeros_like(x), np.zeros_like(x)], axis=1))
-            grp.create_dataset("connectivity", data=np.stack([np.arange(x.size - 1), np.arange(1, x.size)], axis=1))
-            for name, arr in fields.items():
-                if name != "x":
-                    grp.create_dataset(name, data=arr)
+class FieldWriter(Protocol):
+    """Writes one kind of :data:`blastfsi.method.Snapshot` under ``out/fields``."""
+
+    def write(self, out: Path, index: int, time: float, members: list) -> None:
+        """Snapshot number ``index`` at ``time`` of every ensemble member."""
+
+    def write_series(self, out: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
+        """The ParaView time-series index of one member over (index, time) pairs;
+        ``template`` is a snapshot of that member (names and sizes of the fields)."""
+
+    def read(self, out: Path, index: int, member: int):
+        """Snapshot ``index`` of ``member`` back as a Snapshot of this kind."""
+
+
+WRITERS: dict[str, FieldWriter] = {}
+
+
+def register_writer(kind: str, writer: FieldWriter) -> None:
+    WRITERS[kind] = writer
+
+
+def writer(kind: str) -> FieldWriter:
+    if kind not in WRITERS:
+        raise OutputError(f"no field writer for snapshot kind {kind!r}; known: {sorted(WRITERS)}")
+    return WRITERS[kind]
+
+
+def write_snapshot(path: Path, index: int, time: float, members: list) -> None:
+    writer(members[0].kind).write(path, index, time, members)
+
+
+def write_series(path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
+    writer(template.kind).write_series(path, member, snapshots, template)
+
+
+def read_snapshot(path: Path, kind: str, index: int, member: int):
+    return writer(kind).read(path, index, member)
+
+
+class PolylineWriter:
+    """1D meshes (:class:`blastfsi.method.Polyline`): one HDF5 file per snapshot,
+    /member<k>/{coordinates, connectivity, node and zone fields}, attribute
+    time; an XDMF 3 temporal collection per member opens them in ParaView."""
+
+    def write(self, path: Path, index: int, time: float, members: list) -> None:
+        with h5py.File(path / "fields" / snapshot_name(index), "w") as f:
+            f.attrs["time"] = time
+            for k, snap in enumerate(members):
+                grp = f.create_group(f"member{k}")
+                x = np.asarray(snap.nodes)
+                grp.create_dataset("coordinates", data=np.stack([x, np.zeros_like(x), np.zeros_like(x)], axis=1))
+                grp.create_dataset("connectivity",
+                                   data=np.stack([np.arange(x.size - 1), np.arange(1, x.size)], axis=1))
+                grp.attrs["node_fields"] = list(snap.node_fields)
+                grp.attrs["cell_fields"] = list(snap.cell_fields)
+                for name, arr in {**snap.node_fields, **snap.cell_fields}.items():
+                    grp.create_dataset(name, data=np.asarray(arr, np.float64))  # the XDMF index says Precision 8
+
+    def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
+        write_xdmf(path, member, snapshots, list(template.node_fields), list(template.cell_fields),
+                   np.asarray(template.nodes).size)
+
+    def read(self, path: Path, index: int, member: int):
+        with h5py.File(path / "fields" / snapshot_name(index), "r") as f:
+            grp = f[f"member{member}"]
+            return Polyline(nodes=grp["coordinates"][:, 0],
+                            node_fields={n: grp[n][()] for n in grp.attrs["node_fields"]},
+                            cell_fields={n: grp[n][()] for n in grp.attrs["cell_fields"]})
+
+
+def _member_file(index: int, member: int) -> str:
+    return f"member{member}_{index:04d}.h5"
+
+
+def _uniform(edges) -> tuple[list[float], list[float]]:
+    """(origin, spacing) of a uniform rectilinear grid given by its cell edges."""
+    origin, spacing = [], []
+    for axis, e in zip("xyz", edges):
+        d = np.diff(np.asarray(e, float))
+        if not np.allclose(d, d[0], rtol=1e-9, atol=0.0):
+            raise OutputError(f"field output needs a uniform grid; the cell sizes along {axis} vary "
+                              f"({d.min():.6g} to {d.max():.6g} m)")
+        origin.append(float(e[0]))
+        spacing.append(float(d[0]))
+    return origin, spacing
+
+
+def _value_kinds(arrays: dict, lead: int) -> dict[str, str]:
+    return {n: ("scalar", "vector", "tensor")[np.ndim(a) - lead] for n, a in arrays.items()}
+
+
+class GridWriter:
+    """Rectilinear grids (:class:`blastfsi.method.Grid`) through :mod:`blastfsi.io.fields`:
+    fields/member<k>_<i>.h5 per member and snapshot, fields/member<k>.xdmf."""
+
+    def write(self, path: Path, index: int, time: float, members: list) -> None:
+        for k, snap in enumerate(members):
+            origin, spacing = _uniform(snap.edges)
+            fields.write_grid_snapshot(path / "fields" / _member_file(index, k), time, origin, spacing,
+                                       snap.cell_fields)
+
+    def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
+        origin, spacing = _uniform(template.edges)
+        shape = [len(e) - 1 for e in template.edges]
+        fields.write_grid_series(path / "fields" / f"member{member}.xdmf",
+                                 [(_member_file(i, member), t) for i, t in snapshots], shape, origin, spacing,
+                                 _value_kinds(template.cell_fields, len(shape)))
+
+    def read(self, path: Path, index: int, member: int):
+        snap = fields.read_grid_snapshot(path / "fields" / _member_file(index, member))
+        shape = np.shape(next(iter(snap.fields.values())))[:snap.origin.size]
+        return Grid(edges=tuple(o + d * np.arange(n + 1) for o, d, n in zip(snap.origin, snap.spacing, shape)),
+                    cell_fields=snap.fields)
+
+
+class ParticleWriter:
+    """Point clouds (:class:`blastfsi.method.Particles`) through :mod:`blastfsi.io.fields`:
+    fields/member<k>_<i>.h5 per member and snapshot, fields/member<k>.xdmf."""
+
+    def write(self, path: Path, index: int, time: float, members: list) -> None:
+        for k, snap in enumerate(members):
+            fields.write_particle_snapshot(path / "fields" / _member_file(index, k), time, snap.positions,
+                                           snap.point_fields)
+
+    def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
+        entries = []
+        for i, t in snapshots:
+            with h5py.File(path / "fields" / _member_file(i, member), "r") as f:
+                entries.append((_member_file(i, member), t, int(f.attrs["n_points"])))
+        fields.write_particle_series(path / "fields" / f"member{member}.xdmf", entries,
+                                     _value_kinds(template.point_fields, 1))
+
+    def read(self, path: Path, index: int, member: int):
+        snap = fields.read_particle_snapshot(path / "fields" / _member_file(index, member))
+        return Particles(positions=snap.positions, point_fields=snap.fields)
+
+
+register_writer("polyline", PolylineWriter())
+register_writer("grid", GridWriter())
+register_writer("particles", ParticleWriter())
 
 
 def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node_fields, zone_fields, n_nodes) -> None:
@@ -102,14 +235,6 @@ def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node
     text = ('<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain><Grid Name="fields" GridType="Collection" '
             f'CollectionType="Temporal">{"".join(grids)}</Grid></Domain></Xdmf>\n')
     (path / "fields" / f"member{member}.xdmf").write_text(text)
-
-
-def list_snapshots(path: Path) -> list[tuple[int, float]]:
-    out = []
-    for f in sorted((path / "fields").glob("snap_*.h5")):
-        with h5py.File(f, "r") as h:
-            out.append((int(f.stem.split("_")[1]), float(h.attrs["time"])))
-    return out
 
 
 def write_checkpoint(path: Path, index: int, leaves: dict, meta: dict) -> Path:

@@ -1,4 +1,6 @@
-"""von Neumann-Richtmyer (vNR) scheme of seed 002, Eqs. (1)-(23), as pure JAX kernels.
+"""von Neumann-Richtmyer (vNR) scheme of seed 002, Eqs. (1)-(23), as pure JAX kernels,
+in planar, cylindrical and spherical geometry with JWL/ideal-gas zones and the
+programmed burn of seed 000 (Eqs. 52-53).
 
 Notation (ERRATA 002-1): nodes n = 0..N carry position x and velocity v; zones
 n+1/2 carry mass m, specific internal energy e and the artificial viscous
@@ -26,15 +28,36 @@ Departures from the printed paper, each argued in docs/theory.md:
   scheme with a diffusive q, cf. Benson, CMAME 99, 1992). With |dv| in s a zone
   can never be crushed in one step, also at a piston's first step and with
   the viscosity switched off.
+
+Geometry and materials (seed 000 Sec. 4.1, the 1D detonation):
+* Geometry exponent j (0 planar, 1 cylindrical, 2 spherical; static). Node n
+  sits at radius r_n; zone volumes per radian^j are V = (r+^(j+1) - r-^(j+1))/(j+1),
+  the node area is A_n = r_n^j and the momentum update is the compatible
+  (area-weighted) form m_n dv_n/dt = A_n (p_{n-1/2} - p_{n+1/2}), whose work
+  sum_n v_n A_n dp equals sum_z p_z dV_z/dt, so the semi-discrete energy is
+  conserved as in the planar scheme. Planar j = 0 is the 002 scheme unchanged.
+* The viscous pressure uses the node-velocity jump dv (= dx_mid D in planar,
+  Eq. 12); in curved geometry it then ignores the geometric part 2u/r of the
+  volume strain, as Wilkins' form does (no q in a uniform spherical expansion).
+* Every zone carries a JWL row (000 Eq. 54, ERRATA 000-6; an ideal gas is the
+  row A = B = 0, w = gamma - 1) and the programmed burn of 000 Eqs. (52)-(53):
+  p = F p_E with F = clip((t - t_L) D / (1.5 h), 0, 1). F is a non-decreasing
+  function of t, so once it reaches 1 it stays there (ERRATA 000-8); air zones
+  have t_L = -inf (F = 1). The energy update (Eq. 16 generalised) is the
+  trapezoidal p dV work with p/rho = F (f(rho)/rho + w e), solved exactly
+  (linear in the new e); for an ideal gas it is Eq. (16) itself. The time step
+  uses the EOS sound speed of the fully burnt state (F = 1), an upper bound.
 """
 from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 
-from blastfsi.eos import ideal_gas
+from blastfsi import timeloop
+from blastfsi.diagnostics import blast_maps
+from blastfsi.eos import jwl
+from blastfsi.eos.jwl import JWLParams
 
 
 class Numerics(NamedTuple):
@@ -67,6 +90,42 @@ class Gauges(NamedTuple):
 
     positions: jnp.ndarray  # (G,) [m]
     ambient_pressure: jnp.ndarray  # overpressure reference p0 [Pa]
+    arrival_threshold: jnp.ndarray = 0.0  # overpressure that marks the arrival (blast_maps) [Pa]
+
+
+class Zones(NamedTuple):
+    """Per-zone material (JWL row, 000 Eq. 54) and programmed burn (000 Eqs. 52-53), each (N,)."""
+
+    A: jnp.ndarray  # [Pa]
+    B: jnp.ndarray  # [Pa]
+    R1: jnp.ndarray
+    R2: jnp.ndarray
+    omega: jnp.ndarray
+    rho0: jnp.ndarray  # [kg/m^3]
+    lighting_time: jnp.ndarray  # t_L [s]; -inf for inert gas
+    burn_rate: jnp.ndarray  # D / (1.5 h) [1/s]
+
+    def eos(self) -> JWLParams:
+        return JWLParams(self.A, self.B, self.R1, self.R2, self.omega, self.rho0)
+
+
+class Params(NamedTuple):
+    """Everything the step reads besides the state (traced; stacked over an ensemble).
+    ``zones`` None: every zone is the ideal gas of ``num.gamma`` (the plate problems)."""
+
+    num: Numerics
+    bc: Boundaries
+    gauges: Gauges
+    x_right0: jnp.ndarray  # initial plate position [m]
+    zones: Zones | None = None
+
+
+class Static(NamedTuple):
+    """Boundary kinds and geometry exponent, fixed at compile time (see :class:`Boundaries`)."""
+
+    left_velocity_set: bool
+    right_fixed: bool
+    geometry: int = 0  # j: 0 planar, 1 cylindrical, 2 spherical
 
 
 class State(NamedTuple):
@@ -74,16 +133,25 @@ class State(NamedTuple):
     v: jnp.ndarray  # node velocities at t_{j-1/2}, (N+1,)
     e: jnp.ndarray  # zone specific internal energy at t_j, (N,)
     q: jnp.ndarray  # zone viscous pressure at t_{j-1/2}, (N,)
+    a: jnp.ndarray  # zone sound speed at t_j, Eq. (13), (N,): computed once per step
     zone_mass: jnp.ndarray  # (N,), constant in time (Lagrangian)
-    t: jnp.ndarray
-    dt_prev: jnp.ndarray  # dt_j, the step that led to t_j (0 at start)
-    step: jnp.ndarray
+    energy0: jnp.ndarray  # total energy at t = 0 (reference of the energy budget)
     face_impulse: jnp.ndarray  # int (p_{N-1/2} - p_right) dt on the right end
     peak_face_overpressure: jnp.ndarray
     boundary_work: jnp.ndarray  # work done on the system by the boundaries
-    faulted: jnp.ndarray  # True once the state is non-physical (see first_fault for where)
     gauge_impulse: jnp.ndarray  # (G,) int max(p - p0, 0) dt at each gauge
     gauge_peak: jnp.ndarray  # (G,) peak overpressure at each gauge
+    gauge_arrival: jnp.ndarray  # (G,) blast_maps arrival time [s]
+    gauge_end: jnp.ndarray  # (G,) end of the positive phase [s]
+    gauge_positive_impulse: jnp.ndarray  # (G,) positive-phase impulse [Pa s]
+    gauge_last: jnp.ndarray  # (G,) overpressure at the previous step [Pa]
+    zone_peak: jnp.ndarray  # (N,) peak pressure F p_E of each zone (the burn front's pressure) [Pa]
+    # clock fields of blastfsi.timeloop
+    t: jnp.ndarray
+    dt_prev: jnp.ndarray  # dt_j, the step that led to t_j (0 at start)
+    dt0: jnp.ndarray  # the run's first stable step
+    step: jnp.ndarray
+    fault: jnp.ndarray  # timeloop fault code (first_fault locates a non-physical zone)
     hist: jnp.ndarray  # (n_samples, N_HIST + G) histories sampled in compiled code
     hist_next: jnp.ndarray  # index of the next history sample to record
 
@@ -106,9 +174,49 @@ def history_columns(n_gauges: int) -> tuple:
     return HISTORY_COLUMNS + tuple((f"gauge{k}_overpressure", "Pa") for k in range(n_gauges))
 
 
-def zone_pressure(zone_mass, x, e, q, gamma):
-    """002 Eq. (11) (with q = -Q): p = (gamma-1) rho e + q, rho = m / dx."""
-    return ideal_gas.pressure(zone_mass / (x[1:] - x[:-1]), e, gamma) + q
+def ideal_gas_zones(gamma, n: int, dtype) -> Zones:
+    """Every zone the ideal gas p = (gamma - 1) rho e (JWL row A = B = 0, w = gamma - 1), always burnt."""
+    one = jnp.ones((n,), dtype)
+    zero = jnp.zeros((n,), dtype)
+    return Zones(zero, zero, one, one, (gamma - 1.0) * one, one, jnp.full((n,), -jnp.inf, dtype), one)
+
+
+def zone_materials(params: Params, n: int, dtype) -> Zones:
+    return ideal_gas_zones(params.num.gamma, n, dtype) if params.zones is None else params.zones
+
+
+def zone_volume(x, j: int):
+    """Zone volume per radian^j, (r+^(j+1) - r-^(j+1)) / (j+1), written as
+    dr * mean_k(r+^k r-^(j-k)) (no cancellation for thin zones far from the centre)."""
+    lo, hi = x[:-1], x[1:]
+    return (hi - lo) * sum(hi**k * lo ** (j - k) for k in range(j + 1)) / (j + 1)
+
+
+def node_area(x, j: int):
+    """A_n = r_n^j (1 in planar geometry)."""
+    return x**j
+
+
+def burn_fraction(t, zones: Zones):
+    """000 Eq. (53): F = clip((t - t_L) D / (1.5 h), 0, 1); non-decreasing in t (ERRATA 000-8)."""
+    return jnp.clip((t - zones.lighting_time) * zones.burn_rate, 0.0, 1.0)
+
+
+def eos_pressure(rho, e, t, zones: Zones):
+    """000 Eq. (52): p = F p_E, p_E the JWL pressure (Eq. 54) of the zone's row."""
+    return burn_fraction(t, zones) * jwl.pressure(rho, e, zones.eos())
+
+
+def eos_sound_speed(rho, e, zones: Zones):
+    """Sound speed of the burnt state (F = 1), :func:`blastfsi.eos.jwl.sound_speed_squared`;
+    for an ideal gas sqrt(gamma (gamma-1) e), 002 Eq. (13) (ERRATA 002-3). NaN for e < 0 (fault check)."""
+    c2 = jwl.sound_speed_squared(rho, jwl.pressure(rho, e, zones.eos()), zones.eos())
+    return jnp.where(e > 0.0, c2, jnp.nan) ** 0.5
+
+
+def zone_pressure(s, zones: Zones, j: int):
+    """002 Eq. (11) (with q = -Q): p = F p_E(rho, e) + q, rho = m / V."""
+    return eos_pressure(s.zone_mass / zone_volume(s.x, j), s.e, s.t, zones) + s.q
 
 
 def node_masses(zone_mass, right_mass):
@@ -119,27 +227,34 @@ def node_masses(zone_mass, right_mass):
     return m.at[-1].add(right_mass)
 
 
-def stable_dt(dx, a, v, num: Numerics):
-    """002 Eq. (20) with the viscous signal speed (see module docstring).
-
-    NaN (NaN or negative energy somewhere) or <= 0 (a tangled zone) exactly when
-    the state is non-physical, so the time-step reduction doubles as the fault check.
-    """
+def zone_dt(dx, a, v, num: Numerics):
+    """002 Eq. (20) per zone, with the viscous signal speed (see module docstring)."""
     dv = v[1:] - v[:-1]
     # the max keeps dt |dv| <= alpha dx / 2 (no zone crushed in one step) even without viscosity
     s = jnp.where(dv < 0.0, jnp.maximum(2.0 * (num.K1**2 * jnp.abs(dv) + num.K2 * a), jnp.abs(dv)), 0.0)
-    return num.cfl * jnp.min(dx / (s + jnp.sqrt(s * s + a * a)))
+    return num.cfl * dx / (s + jnp.sqrt(s * s + a * a))
 
 
-def viscous_pressure(rho_mid, dx_mid, D, a, num: Numerics):
-    """002 Eq. (12), q = -Q >= 0, active in compression only (Eq. 5)."""
-    q = rho_mid * (num.K1 * dx_mid * D) ** 2 + rho_mid * num.K2 * a * dx_mid * jnp.abs(D)
-    return jnp.where(D < 0.0, q, 0.0)
+def stable_dt(dx, a, v, num: Numerics):
+    """The smallest :func:`zone_dt`. NaN (NaN or negative energy somewhere) or
+    <= 0 (a tangled zone) exactly when the state is non-physical, so the
+    time-step reduction doubles as the fault check."""
+    return jnp.min(zone_dt(dx, a, v, num))
 
 
-def implicit_energy(e, q, rho_mid, dtD, gamma):
-    """002 Eq. (16) with Q = -q: trapezoidal (implicit) p dV work of the gas pressure."""
-    return (e + ((1.0 - gamma) * 0.5 * e - q / rho_mid) * dtD) / (1.0 + 0.5 * (gamma - 1.0) * dtD)
+def viscous_pressure(rho_mid, dv, a, num: Numerics):
+    """002 Eq. (12), q = -Q >= 0, active in compression only (Eq. 5); dv = v_{n+1} - v_n
+    (= dx_mid D in planar geometry)."""
+    q = rho_mid * (num.K1 * dv) ** 2 + rho_mid * num.K2 * a * jnp.abs(dv)
+    return jnp.where(dv < 0.0, q, 0.0)
+
+
+def implicit_energy(e, q, rho_mid, dtD, p_over_rho_old, F_new, f_over_rho_new, omega):
+    """002 Eq. (16) with Q = -q, for p = F (f(rho) + w rho e) (000 Eqs. 52, 54): trapezoidal p dV work,
+    e' = e - (1/2 (p/rho + p'/rho') + q/rho_mid) dtD with p'/rho' = F' (f'/rho' + w e'), linear in e'.
+    For an ideal gas (f = 0, w = gamma - 1, F = 1) this is Eq. (16) as printed."""
+    return (e - (0.5 * p_over_rho_old + 0.5 * F_new * f_over_rho_new + q / rho_mid) * dtD) / (
+        1.0 + 0.5 * F_new * omega * dtD)
 
 
 def total_energy(state: State, bc: Boundaries):
@@ -148,43 +263,51 @@ def total_energy(state: State, bc: Boundaries):
     return jnp.sum(state.zone_mass * state.e) + 0.5 * jnp.sum(nm * state.v**2)
 
 
-def vnr_step(s: State, dt, a, node_mass, num: Numerics, bc: Boundaries, left_velocity_set: bool,
-             right_fixed: bool):
-    """Advance one time step dt = dt_{j+1} (002 Sec. 2 sequence); ``a`` the zone
-    sound speeds at t_j, ``node_mass`` from :func:`node_masses`. Pure."""
-    gamma = num.gamma
-    dx = s.x[1:] - s.x[:-1]
-    p = zone_pressure(s.zone_mass, s.x, s.e, s.q, gamma)
-    p_left = p[0] if left_velocity_set else bc.left_pressure
+def vnr_step(s: State, dt, node_mass, num: Numerics, bc: Boundaries, static: Static, zones: Zones):
+    """Advance one time step dt = dt_{j+1} (002 Sec. 2 sequence); ``node_mass``
+    from :func:`node_masses`. Pure; leaves the clock fields to the time loop."""
+    j = static.geometry
+    vol = zone_volume(s.x, j)
+    rho = s.zone_mass / vol
+    F = burn_fraction(s.t, zones)
+    p_eos = F * jwl.pressure(rho, s.e, zones.eos())  # 000 Eqs. (52), (54)
+    p = p_eos + s.q
+    p_left = p[0] if static.left_velocity_set else bc.left_pressure
     p_ext = jnp.concatenate([jnp.reshape(p_left, (1,)), p, jnp.reshape(bc.right_pressure, (1,))])
-    acc = (p_ext[:-1] - p_ext[1:]) / node_mass  # Eq. (10), Eq. (23)
+    area = node_area(s.x, j)
+    acc = area * (p_ext[:-1] - p_ext[1:]) / node_mass  # Eq. (10), Eq. (23), area-weighted
     v = s.v + 0.5 * (s.dt_prev + dt) * acc  # Eq. (9), ERRATA 002-2
-    if left_velocity_set:
+    if static.left_velocity_set:
         v = v.at[0].set(bc.left_velocity)
-    if right_fixed:
+    if static.right_fixed:
         v = v.at[-1].set(0.0)
     x = s.x + dt * v  # Eq. (8)
-    dx_new = x[1:] - x[:-1]
-    dtD = 2.0 * (dx_new - dx) / (dx_new + dx)  # dt * Eq. (14)
-    dx_mid = 0.5 * (dx + dx_new)  # Eq. (15)
-    rho_mid = 0.5 * s.zone_mass * (1.0 / dx_new + 1.0 / dx)  # Eq. (17)
-    q = viscous_pressure(rho_mid, dx_mid, dtD / dt, a, num)
-    e = implicit_energy(s.e, q, rho_mid, dtD, gamma)
-    work = dt * (p_left * v[0] - bc.right_pressure * v[-1])
+    vol_new = zone_volume(x, j)
+    dtD = 2.0 * (vol_new - vol) / (vol_new + vol)  # dt * Eq. (14)
+    rho_mid = 0.5 * s.zone_mass * (1.0 / vol_new + 1.0 / vol)  # Eq. (17)
+    q = viscous_pressure(rho_mid, v[1:] - v[:-1], s.a, num)
+    rho_new = s.zone_mass / vol_new
+    F_new = burn_fraction(s.t + dt, zones)
+    e = implicit_energy(s.e, q, rho_mid, dtD, p_eos / rho, F_new,
+                        jwl.reference_pressure(rho_new, zones.eos()) / rho_new, zones.omega)
+    area_new = node_area(x, j)
+    work = dt * (p_left * v[0] * area_new[0] - bc.right_pressure * v[-1] * area_new[-1])
     face_over = p[-1] - bc.right_pressure
     return s._replace(
-        x=x, v=v, e=e, q=q, t=s.t + dt, dt_prev=dt, step=s.step + 1,
+        x=x, v=v, e=e, q=q, a=eos_sound_speed(rho_new, e, zones),  # Eq. (13) at t_{j+1}
         face_impulse=s.face_impulse + dt * face_over,
         peak_face_overpressure=jnp.maximum(s.peak_face_overpressure, face_over),
         boundary_work=s.boundary_work + work,
+        zone_peak=jnp.maximum(s.zone_peak, p_eos),
     )
 
 
-def gauge_overpressure(s: State, gauges: Gauges, gamma):
+def gauge_overpressure(s: State, gauges: Gauges, zones: Zones, j: int):
     """Overpressure in the zone holding each gauge; NaN for a gauge outside the gas."""
     k = jnp.clip(jnp.searchsorted(s.x, gauges.positions) - 1, 0, s.e.shape[0] - 1)
-    rho = s.zone_mass[k] / (s.x[k + 1] - s.x[k])
-    p = ideal_gas.pressure(rho, s.e[k], gamma) + s.q[k]
+    xk = jnp.stack([s.x[k], s.x[k + 1]])
+    rho = s.zone_mass[k] / zone_volume(xk, j)[0]
+    p = eos_pressure(rho, s.e[k], s.t, Zones(*(f[k] for f in zones))) + s.q[k]
     inside = (gauges.positions >= s.x[0]) & (gauges.positions <= s.x[-1])
     return jnp.where(inside, p - gauges.ambient_pressure, jnp.nan)
 
@@ -198,77 +321,66 @@ def first_fault(s: State):
     return jnp.where(jnp.any(bad), jnp.argmax(bad), -1).astype(jnp.int32)
 
 
-def history_row(s: State, bc: Boundaries, gauges: Gauges, e0, x_right0, right_fixed: bool, gamma):
-    p = zone_pressure(s.zone_mass, s.x, s.e, s.q, gamma)
-    v_plate = 0.0 * s.v[-1] if right_fixed else s.v[-1]
-    plate_impulse = s.face_impulse if right_fixed else bc.right_mass * s.v[-1]
-    energy_error = total_energy(s, bc) - e0 - s.boundary_work
+def history_row(s: State, params: Params, static: Static, zones: Zones):
+    bc = params.bc
+    p = zone_pressure(s, zones, static.geometry)
+    v_plate = 0.0 * s.v[-1] if static.right_fixed else s.v[-1]
+    plate_impulse = s.face_impulse if static.right_fixed else bc.right_mass * s.v[-1]
+    energy_error = total_energy(s, bc) - s.energy0 - s.boundary_work
     plate = jnp.stack([
-        s.t, s.x[-1] - x_right0, v_plate, p[-1] - bc.right_pressure, plate_impulse,
+        s.t, s.x[-1] - params.x_right0, v_plate, p[-1] - bc.right_pressure, plate_impulse,
         s.face_impulse, p[0] - bc.right_pressure, energy_error,
     ])
-    return jnp.concatenate([plate, gauge_overpressure(s, gauges, gamma)])
+    return jnp.concatenate([plate, gauge_overpressure(s, params.gauges, zones, static.geometry)])
 
 
-def initial_state(x, v, e, zone_mass, n_samples: int, n_gauges: int = 0) -> State:
+def initial_state(x, v, e, zone_mass, gamma, n_samples: int, n_gauges: int = 0, right_mass=0.0,
+                  zones: Zones | None = None, geometry: int = 0) -> State:
+    """State at t = 0; ``right_mass`` (the plate) enters the reference energy; ``zones``
+    None: the ideal gas of ``gamma`` everywhere."""
     x = jnp.asarray(x)
+    e = jnp.asarray(e)
+    zone_mass = jnp.asarray(zone_mass)
+    zones = ideal_gas_zones(jnp.asarray(gamma, x.dtype), e.shape[0], x.dtype) if zones is None else zones
     g = jnp.zeros((n_gauges,), x.dtype)
-    z = jnp.zeros_like(jnp.asarray(e))
     zero = jnp.zeros((), x.dtype)
-    return State(
-        x=x, v=jnp.asarray(v), e=jnp.asarray(e), q=z, zone_mass=jnp.asarray(zone_mass),
-        t=zero, dt_prev=zero, step=jnp.zeros((), jnp.int32), face_impulse=zero,
+    s = State(
+        x=x, v=jnp.asarray(v), e=e, q=jnp.zeros_like(e), a=eos_sound_speed(zone_mass / zone_volume(x, geometry), e,
+                                                                            zones),
+        zone_mass=zone_mass, energy0=zero, face_impulse=zero,
         peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
-        faulted=jnp.asarray(False), gauge_impulse=g, gauge_peak=g - jnp.inf,
-        hist=jnp.full((n_samples, N_HIST + n_gauges), jnp.nan, x.dtype),
-        hist_next=jnp.zeros((), jnp.int32),
+        gauge_impulse=g, gauge_peak=g - jnp.inf, gauge_arrival=g + jnp.inf, gauge_end=g + jnp.inf,
+        gauge_positive_impulse=g, gauge_last=g, zone_peak=jnp.zeros_like(e),
+        **timeloop.clock(n_samples, N_HIST + n_gauges, x.dtype),
     )
+    right = Boundaries(zero, zero, jnp.asarray(right_mass, x.dtype), zero)
+    return s._replace(energy0=total_energy(s, right))
 
 
-def advance(s: State, t_stop, max_steps, sample_interval, e0, x_right0, num: Numerics, bc: Boundaries,
-            gauges: Gauges, left_velocity_set: bool, right_fixed: bool) -> State:
-    """Advance in compiled code until t_stop, max_steps more steps, or a fault.
-
-    Steps are shortened to land exactly on t_stop and on every history sample
-    time k * sample_interval, where history row k is recorded. Gauge impulses
-    and peaks are accumulated every step. A
-    non-physical state (detected by the time-step reduction) sets ``faulted``
-    and ends the loop without stepping; the state returned is that state, for
-    :func:`first_fault` to locate (the last checkpoint on disk stays usable).
-    """
-    n_samples = s.hist.shape[0]
-    step_limit = s.step + max_steps
+def advance(s: State, params: Params, static: Static, t_stop, max_steps, sample_interval,
+            dt_floor_fraction) -> State:
+    """Advance one member with :func:`blastfsi.timeloop.run_until` until t_stop,
+    max_steps more steps, or a fault (non-physical state, or the step below
+    ``dt_floor_fraction`` of the first). Gauge impulses and peaks are
+    accumulated every step, from the state at t_j like the plate load."""
+    num, bc, gauges = params.num, params.bc, params.gauges
     node_mass = node_masses(s.zone_mass, bc.right_mass)
+    zones = zone_materials(params, s.e.shape[0], s.e.dtype)
+    j = static.geometry
 
-    def next_sample_time(st):
-        return jnp.where(st.hist_next < n_samples, st.hist_next * sample_interval, jnp.inf)
+    def stable(st):
+        return stable_dt(st.x[1:] - st.x[:-1], st.a, st.v, num)
 
-    def record_if(st, due):
-        k = jnp.minimum(st.hist_next, n_samples - 1)
-        row = jax.lax.cond(due, lambda: history_row(st, bc, gauges, e0, x_right0, right_fixed, num.gamma),
-                           lambda: st.hist[k])
-        return st._replace(hist=st.hist.at[k].set(row), hist_next=st.hist_next + due.astype(st.hist_next.dtype))
+    def step(st, dt):
+        new = vnr_step(st, dt, node_mass, num, bc, static, zones)
+        pg = gauge_overpressure(st, gauges, zones, j)
+        pg_new = jnp.nan_to_num(gauge_overpressure(new._replace(t=st.t + dt), gauges, zones, j))
+        maps = blast_maps.update(blast_maps.BlastMaps(st.gauge_peak, st.gauge_arrival, st.gauge_end,
+                                                      st.gauge_positive_impulse, st.gauge_last),
+                                 pg_new, st.t, dt, gauges.arrival_threshold)
+        return new._replace(gauge_impulse=st.gauge_impulse + dt * jnp.nan_to_num(jnp.maximum(pg, 0.0)),
+                            gauge_peak=jnp.fmax(st.gauge_peak, pg), gauge_arrival=maps.arrival,
+                            gauge_end=maps.end, gauge_positive_impulse=maps.impulse, gauge_last=maps.last)
 
-    s = record_if(s, (s.hist_next == 0) & (s.step == 0))
-
-    def cond(st):
-        return (st.t < t_stop) & (st.step < step_limit) & ~st.faulted
-
-    def body(st):
-        a = ideal_gas.sound_speed(st.e, num.gamma)  # Eq. (13)
-        dt_cfl = stable_dt(st.x[1:] - st.x[:-1], a, st.v, num)
-
-        def go(st):
-            target = jnp.minimum(t_stop, next_sample_time(st))
-            lands = st.t + dt_cfl >= target
-            dt = jnp.where(lands, target - st.t, dt_cfl)
-            new = vnr_step(st, dt, a, node_mass, num, bc, left_velocity_set, right_fixed)
-            pg = gauge_overpressure(st, gauges, num.gamma)  # at t_j, like the plate load
-            new = new._replace(gauge_impulse=st.gauge_impulse + dt * jnp.nan_to_num(jnp.maximum(pg, 0.0)),
-                               gauge_peak=jnp.fmax(st.gauge_peak, pg))
-            due = lands & (target == next_sample_time(st))
-            return record_if(new._replace(t=jnp.where(lands, target, new.t)), due)
-
-        return jax.lax.cond(dt_cfl > 0.0, go, lambda st: st._replace(faulted=jnp.asarray(True)), st)
-
-    return jax.lax.while_loop(cond, body, s)
+    return timeloop.run_until(s, t_stop, max_steps, sample_interval, dt_floor_fraction, stable_dt=stable, step=step,
+                              history_row=lambda st: history_row(st, params, static, zones))

@@ -28,12 +28,17 @@ def plate_histories(file: Path, histories: list[dict], members: list[dict]) -> N
     plt.close(fig)
 
 
-def gauge_histories(file: Path, histories: list[dict], positions: list[float]) -> None:
-    """Overpressure at each gauge (member 0 of an ensemble)."""
+def _position(p) -> str:
+    coords = p if isinstance(p, (list, tuple)) else [p]
+    return "(" + ", ".join(f"{c:g}" for c in coords) + ") m" if len(coords) > 1 else f"x = {coords[0]:g} m"
+
+
+def gauge_histories(file: Path, histories: list[dict], positions: list) -> None:
+    """Overpressure at each gauge (member 0 of an ensemble); positions are numbers (1D) or points."""
     hist = histories[0]
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for k, x in enumerate(positions):
-        ax.plot(hist["time"] * 1e3, hist[f"gauge{k}_overpressure"] / 1e3, lw=1.2, label=f"x = {x:g} m")
+        ax.plot(hist["time"] * 1e3, hist[f"gauge{k}_overpressure"] / 1e3, lw=1.2, label=_position(x))
     ax.set_xlabel("time [ms]"), ax.set_ylabel("overpressure [kPa]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(file, dpi=120)

@@ -6,14 +6,15 @@ is xi = x_N - L.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from blastfsi.eos import ideal_gas
 from blastfsi.exact import shock
 from blastfsi.exact.sedov import PlanarSedov
-from blastfsi.scenario import Scenario, ScenarioError
+from blastfsi.lagrangian1d.scenario import Scenario
+from blastfsi.scenario import ScenarioError
 
 
 @dataclass(frozen=True)
@@ -29,6 +30,12 @@ class Setup:
     left_velocity_set: bool
     right_fixed: bool
     info: dict = field(default_factory=dict)  # theory values and problem metadata (JSON-able)
+    gauges: np.ndarray = field(default_factory=lambda: np.zeros(0))  # gauge positions [m]
+    ambient_pressure: float = 0.0  # overpressure reference p0 of the gauges [Pa]
+
+    @property
+    def cells(self) -> int:
+        return self.zone_mass.size
 
 
 def _uniform_grid(sc: Scenario):
@@ -223,4 +230,5 @@ BUILDERS = {"uniform": build_uniform, "exponential": build_exponential, "sedov":
 
 
 def build(sc: Scenario) -> Setup:
-    return BUILDERS[sc.incident.profile](sc)
+    setup = BUILDERS[sc.incident.profile](sc)
+    return replace(setup, gauges=np.asarray(sc.output.gauges, float), ambient_pressure=sc.gas.pressure)

@@ -1,0 +1,358 @@
+"""Throughput of the Eulerian solver (issue 5, item 7). Not run by the tests.
+
+    python benchmarks/bench_euler.py --sizes 64 128 --schemes lax-wendroff hllc-muscl \
+        --precision float64 float32 --out benchmarks/results_euler_cpu.json [--pyclaw FILE.npz] [--profile]
+
+3D rows: the whole step (blastfsi.euler.step) on an n^3 grid, ideal gas
+gamma = 1.4, one material, outflow on all faces, a spherical blast (p = 10
+inside r < 0.2, p = 1 outside, rho = 1) in [-1, 1]^3. A jitted
+``lax.fori_loop`` runs N steps at a fixed dt (half the initial CFL step) so the
+loop stays on the device; compilation and one warm-up step are excluded,
+N is chosen so one run lasts >= --min-time s, and the best of --repeats runs
+is reported as cell-steps/s = n^3 N / wall. float32 rows run in a subprocess
+with BLASTFSI_X64=0 (how blastfsi selects its precision, see blastfsi/__init__.py).
+
+Memory-traffic model (bytes per cell-step, b = 8 (float64) or 4 (float32), five conservative fields):
+* lax-wendroff, split (000 Eq. 6): six directional operators per 3D step; each at
+  best reads and writes the five fields once: 6 x (5 + 5) x b = 480 B (float64).
+* hllc-muscl, unsplit SSP-RK2: stage 1 reads U and writes U1, stage 2 reads U and U1
+  and writes U^{n+1}, each stage one pass over all three axes: (10 + 15) x b = 200 B.
+The bandwidth bound is B / (bytes per cell-step); the fraction reached is the measured
+rate over that bound. B: on a CPU the best of a STREAM-like copy and triad measured
+here (NumPy, one thread, and a jitted JAX kernel, all threads; each written byte counted
+once as in STREAM); on a GPU the nominal HBM bandwidth (--gpu-bandwidth, H100 SXM
+3.35e12 B/s) next to the measured one. Also reported, from XLA's cost analysis of the
+compiled loop (its body = one step): bytes accessed, flops and transcendentals per
+cell-step and the number of fused kernels per step -- what the compiled code moves,
+against the model.
+
+--pyclaw FILE.npz: the 2D blast of bench_pyclaw.py (cylindrical charge, 400^2 cells)
+with both schemes, timed (adaptive CFL step, cfl = --cfl) and compared in L1 density
+error with PyClaw against a 1D cylindrical reference of our own (hllc-muscl,
+--ref-cells cells on r in [0, 1.5]); the file is made with /tmp/clawenv/bin/python
+(--pyclaw-python) when missing.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+SCHEMES = {"lax-wendroff": 0, "hllc-muscl": 1}
+FIELD_PASSES = {"lax-wendroff": 6 * (5 + 5), "hllc-muscl": 10 + 15}  # field reads+writes per 3D cell-step (docstring)
+H100_BANDWIDTH = 3.35e12  # B/s, NVIDIA H100 SXM5 HBM3 datasheet
+BLAST = dict(p_in=10.0, p_out=1.0, rho=1.0, radius=0.2, gamma=1.4)  # nondimensional blast, same as bench_pyclaw.py
+T_END_2D, R_MAX_REF = 0.25, 1.5  # 2D comparison: end time (shock radius ~0.65 < 1), extent of the 1D reference
+HERE = Path(__file__).resolve().parent
+
+
+# ----------------------------------------------------------------------------------------------- worker side
+def _jax_setup():
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    import blastfsi  # noqa: F401  (sets the precision from BLASTFSI_X64)
+    from blastfsi import euler
+    from blastfsi.eos.jwl import ideal_gas_params
+    return jax, jnp, np, euler, ideal_gas_params
+
+
+def _blast_state(shape, lower, upper, scheme, geometry, bc, cfl):
+    """Config, Params and U of the blast (cell-centre rule: p_in where the centre lies at r < radius)."""
+    jax, jnp, np, euler, ideal_gas_params = _jax_setup()
+    dtype = np.float64 if jax.config.jax_enable_x64 else np.float32
+    dx = (upper - lower) / shape[0]
+    cfg = euler.Config(tuple(shape), dx, geometry, bc, scheme, 1, (lower,) * len(shape))
+    params = euler.Params(jnp.asarray([list(ideal_gas_params(BLAST["gamma"]))], dtype), jnp.asarray(cfl, dtype))
+    axes = [lower + (np.arange(m) + 0.5) * dx for m in shape]
+    r = np.sqrt(sum(c ** 2 for c in np.meshgrid(*axes, indexing="ij")))
+    p = jnp.asarray(np.where(r < BLAST["radius"], BLAST["p_in"], BLAST["p_out"]), dtype)
+    U = euler.conservative(jnp.full(shape, BLAST["rho"], dtype), None, jnp.zeros((len(shape),) + tuple(shape), dtype),
+                           p, params, cfg)
+    return cfg, params, U, axes
+
+
+def _cost(compiled, cells):
+    ca = compiled.cost_analysis()
+    ca = ca[0] if isinstance(ca, (list, tuple)) else ca
+    text = compiled.as_text()
+    return {"xla_bytes_per_cell_step": ca.get("bytes accessed", float("nan")) / cells,
+            "xla_flops_per_cell_step": ca.get("flops", float("nan")) / cells,
+            "xla_transcendentals_per_cell_step": ca.get("transcendentals", float("nan")) / cells,
+            "fused_kernels_per_step": len(re.findall(r"^\s*\S+ = \S+ fusion\(", text, re.M))}
+
+
+def _time(fn, args, repeats):
+    import jax
+    walls = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        walls.append(time.perf_counter() - t0)
+    return walls
+
+
+def bench_3d(n, scheme, repeats, min_time, max_steps):
+    jax, jnp, np, euler, _ = _jax_setup()
+    cfg, params, U, _ = _blast_state((n, n, n), -1.0, 1.0, SCHEMES[scheme], 0, ((0, 0),) * 3, 0.5)
+    dt = 0.5 * euler.stable_dt(U, params, cfg)
+
+    def loop(U, dt, params, steps):
+        return jax.lax.fori_loop(0, steps, lambda i, u: euler.step(u, dt, params, cfg), U)
+
+    one = jnp.asarray(1, jnp.int32)
+    t0 = time.perf_counter()
+    compiled = jax.jit(loop).lower(U, dt, params, one).compile()
+    compile_s = time.perf_counter() - t0
+    warm = min(_time(compiled, (U, dt, params, one), 2))
+    steps = int(min(max_steps, max(1, np.ceil(min_time / warm))))
+    load0, cpu0 = os.getloadavg()[0], time.process_time()
+    walls = _time(compiled, (U, dt, params, jnp.asarray(steps, jnp.int32)), repeats)
+    cpu_per_wall = (time.process_time() - cpu0) / sum(walls)
+    out = compiled(U, dt, params, jnp.asarray(steps, jnp.int32))
+    wall = min(walls)
+    cells = n ** 3
+    row = {"size": n, "scheme": scheme, "dtype": str(U.dtype), "cells": cells, "steps": steps,
+           "compile_s": compile_s, "walls_s": walls, "wall_s": wall, "cell_steps_per_s": cells * steps / wall,
+           "finite": bool(jnp.all(jnp.isfinite(out))), "process_cpu_s_per_wall_s": cpu_per_wall,
+           "loadavg_1min_before": load0,
+           "loadavg_1min_after": os.getloadavg()[0]}
+    row.update(_cost(compiled, cells))
+    return row
+
+
+def stream():
+    """STREAM-like copy and triad bandwidth [B/s], NumPy (one thread) and jitted JAX (all threads)."""
+    jax, jnp, np, _, _ = _jax_setup()
+    n = 1 << 25  # 256 MiB per float64 array: far beyond any cache
+    a, b, c = np.random.rand(n), np.empty(n), np.random.rand(n)
+    res = {}
+    res["numpy_copy"] = 2 * 8 * n / min(_time(lambda: np.copyto(b, a), (), 5))
+    res["numpy_triad"] = 3 * 8 * n / min(_time(lambda: np.add(a, 3.0 * c, out=b), (), 5))  # 3.0*c is a temporary
+    ja, jc = jnp.asarray(a), jnp.asarray(c)
+    scale = jax.jit(lambda x: 3.0 * x)
+    triad = jax.jit(lambda x, y: x + 3.0 * y)
+    _time(scale, (ja,), 1), _time(triad, (ja, jc), 1)
+    res["jax_scale"] = 2 * 8 * n / min(_time(scale, (ja,), 5))
+    res["jax_triad"] = 3 * 8 * n / min(_time(triad, (ja, jc), 5))
+    res["device"] = str(jax.devices()[0])
+    return res
+
+
+def _run_to(U, t_end, params, cfg):
+    """Adaptive CFL steps to t_end inside one while_loop; returns (U, t, steps)."""
+    jax, jnp, _, euler, _ = _jax_setup()
+
+    def body(c):
+        u, t, k = c
+        dt = jnp.minimum(euler.stable_dt(u, params, cfg), t_end - t)
+        return euler.step(u, dt, params, cfg), t + dt, k + 1
+
+    return jax.lax.while_loop(lambda c: c[1] < t_end, body, (U, jnp.zeros((), U.dtype), jnp.zeros((), jnp.int32)))
+
+
+def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats):
+    jax, jnp, np, euler, _ = _jax_setup()
+    cfg, params, U, axes = _blast_state(shape, lower, upper, scheme, geometry, bc, cfl)
+    t0 = time.perf_counter()
+    compiled = jax.jit(_run_to, static_argnums=3).lower(U, jnp.asarray(t_end, U.dtype), params, cfg).compile()
+    compile_s = time.perf_counter() - t0
+    args = (U, jnp.asarray(t_end, U.dtype), params)
+    walls = _time(compiled, args, repeats)
+    u_end, t, steps = compiled(*args)
+    rho = np.asarray(euler.primitives(u_end, params, cfg)["rho"])
+    return {"rho": rho, "axes": axes, "t": float(t), "steps": int(steps), "wall_s": min(walls), "walls_s": walls,
+            "compile_s": compile_s}
+
+
+def compare_2d(pyclaw_npz, cfl, ref_cells, repeats):
+    """Our 2D blast (both schemes) and PyClaw's against a 1D cylindrical reference (module docstring)."""
+    _, _, np, euler, _ = _jax_setup()
+    claw = np.load(pyclaw_npz)
+    n = int(claw["density"].shape[0])
+    refs = {}
+    for m in (ref_cells // 2, ref_cells):
+        r = _solve((m,), 0.0, R_MAX_REF, euler.HLLC_MUSCL, euler.CYLINDRICAL, ((euler.AXIS, euler.OUTFLOW),), cfl,
+                   T_END_2D, 1)
+        refs[m] = r
+
+    def l1(rho, xc, yc, ref):
+        """Mean |rho - rho_ref(r)| over the square (= L1 norm / area)."""
+        return float(np.mean(np.abs(rho - np.interp(np.hypot(xc, yc), ref["axes"][0], ref["rho"]))))
+
+    ref = refs[ref_cells]
+    rows = []
+    for scheme, code in SCHEMES.items():
+        s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, cfl, T_END_2D, repeats)
+        xc, yc = np.meshgrid(*s["axes"], indexing="ij")
+        rows.append({"code": f"blastfsi {scheme}", "cfl": cfl, "steps": s["steps"], "t_end": s["t"],
+                     "wall_s": s["wall_s"], "walls_s": s["walls_s"], "compile_s": s["compile_s"],
+                     "cell_steps_per_s": n * n * s["steps"] / s["wall_s"], "l1_density": l1(s["rho"], xc, yc, ref)})
+    rows.append({"code": "pyclaw " + str(claw["solver"]), "cfl": "0.9 desired / 1.0 max", "steps": int(claw["steps"]),
+                 "t_end": float(claw["time"]), "wall_s": float(claw["wall_s"]),
+                 "walls_s": [float(w) for w in claw["walls_s"]], "cell_steps_per_s": float(claw["cell_steps_per_s"]),
+                 "l1_density": l1(claw["density"], claw["x"], claw["y"], ref)})
+    half = refs[ref_cells // 2]
+    xc, yc = np.meshgrid(*s["axes"], indexing="ij")
+    ref_err = float(np.mean(np.abs(np.interp(np.hypot(xc, yc), half["axes"][0], half["rho"])
+                                   - np.interp(np.hypot(xc, yc), ref["axes"][0], ref["rho"]))))
+    return {"grid": f"{n}x{n} on [-1,1]^2", "t_end": T_END_2D, "blast": BLAST,
+            "reference": {"cells": ref_cells, "r_max": R_MAX_REF, "scheme": "hllc-muscl, 1D cylindrical",
+                          "steps": ref["steps"], "wall_s": ref["wall_s"],
+                          "l1_vs_half_resolution_reference": ref_err},
+            "rows": rows}
+
+
+def profile(n):
+    """Sub-kernel timings at n^3 (float per the process precision): one LW sweep per axis, the HLLC
+    right-hand side, the cell-state (EOS) pass and a five-field copy, each jitted alone."""
+    jax, jnp, np, euler, _ = _jax_setup()
+    from blastfsi.euler import hllc, lax_wendroff
+    from blastfsi.euler.config import layout
+    from blastfsi.euler.mixture import cell_state, eos_rows
+    cfg, params, U, _ = _blast_state((n, n, n), -1.0, 1.0, 0, 0, ((0, 0),) * 3, 0.5)
+    lay = layout(cfg)
+    dt = 0.5 * euler.stable_dt(U, params, cfg)
+    cells = n ** 3
+    out = {}
+
+    def rec(name, fn, *args):
+        compiled = jax.jit(fn).lower(*args).compile()
+        _time(compiled, args, 1)
+        wall = min(_time(compiled, args, 5))
+        out[name] = {"ns_per_cell": 1e9 * wall / cells}
+        out[name].update(_cost(compiled, cells))
+
+    def sweep(axis):
+        return lambda u, dt, eos: lax_wendroff.sweep(u, 0.5 * dt, eos_rows(eos, 1), cfg, lay, axis)
+
+    for axis in range(3):
+        rec(f"lax-wendroff sweep axis {axis}", sweep(axis), U, dt, params.eos)
+    cfg_h = cfg._replace(scheme=1)
+    rec("hllc-muscl rhs (3 axes)", lambda u, eos: hllc.rhs(u, eos_rows(eos, 1), cfg_h, lay), U, params.eos)
+    rec("cell_state (EOS pass: p, c^2)", lambda u, eos: (lambda st: jnp.stack((st.p, st.c2)))(
+        cell_state(u, eos_rows(eos, 1), lay)), U, params.eos)
+    rec("copy of five fields", lambda u: u * 1.0000001, U)
+    return out
+
+
+def worker(task):
+    if task["kind"] == "stream":
+        return stream()
+    if task["kind"] == "3d":
+        return bench_3d(task["n"], task["scheme"], task["repeats"], task["min_time"], task["max_steps"])
+    if task["kind"] == "compare2d":
+        return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"])
+    if task["kind"] == "profile":
+        return profile(task["n"])
+    raise ValueError(f"unknown worker task kind {task['kind']!r}")
+
+
+# ----------------------------------------------------------------------------------------------- driver side
+def spawn(task, precision="float64"):
+    """Run one task in a fresh interpreter with the precision selected by BLASTFSI_X64."""
+    env = dict(os.environ, BLASTFSI_X64="1" if precision == "float64" else "0")
+    proc = subprocess.run([sys.executable, __file__, "--worker", json.dumps(task)], env=env, capture_output=True,
+                          text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"worker {task} failed:\n{proc.stderr[-4000:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def source_hash():
+    """sha256 over src/blastfsi/euler/*.py: which version of the kernels these numbers belong to."""
+    h = hashlib.sha256()
+    for f in sorted((HERE.parent / "src" / "blastfsi" / "euler").glob("*.py")):
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def bound(row, bandwidth):
+    b = 8 if row["dtype"] == "float64" else 4
+    per_cell = FIELD_PASSES[row["scheme"]] * b
+    limit = bandwidth / per_cell
+    return {"model_bytes_per_cell_step": per_cell, "bandwidth_bound_cell_steps_per_s": limit,
+            "fraction_of_bound": row["cell_steps_per_s"] / limit}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", type=int, nargs="+", default=None, help="cells per axis (default 64 128, +256 --gpu)")
+    ap.add_argument("--schemes", nargs="+", choices=sorted(SCHEMES), default=list(SCHEMES))
+    ap.add_argument("--precision", nargs="+", choices=("float64", "float32"), default=["float64", "float32"])
+    ap.add_argument("--gpu", action="store_true", help="add 256^3; bound from --gpu-bandwidth")
+    ap.add_argument("--gpu-bandwidth", type=float, default=H100_BANDWIDTH)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats-2d", type=int, default=2, help="timed runs of each 2D comparison solve")
+    ap.add_argument("--min-time", type=float, default=2.0, help="seconds per timed run (chooses N)")
+    ap.add_argument("--max-steps", type=int, default=500)
+    ap.add_argument("--pyclaw", default=None, help="PyClaw .npz of bench_pyclaw.py; runs the 2D comparison")
+    ap.add_argument("--pyclaw-python", default="/tmp/clawenv/bin/python")
+    ap.add_argument("--pyclaw-cells", type=int, default=400)
+    ap.add_argument("--cfl", type=float, default=0.5, help="Courant number of the 2D comparison (scenario default)")
+    ap.add_argument("--ref-cells", type=int, default=20000)
+    ap.add_argument("--profile", type=int, default=None, metavar="N", help="sub-kernel timings at N^3 (float64)")
+    ap.add_argument("--out", default=None)
+    ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.worker is not None:
+        print(json.dumps(worker(json.loads(args.worker))))
+        return
+
+    st = spawn({"kind": "stream"})
+    on_gpu = args.gpu or "cpu" not in st["device"].lower()
+    measured = max(v for k, v in st.items() if k != "device")
+    bandwidth = args.gpu_bandwidth if on_gpu else measured
+    sizes = args.sizes or ([64, 128, 256] if on_gpu else [64, 128])
+    report = {"machine": platform.processor() or platform.machine(), "cpu_count": os.cpu_count(),
+              "device": st["device"], "stream_bytes_per_s": st, "bandwidth_used_bytes_per_s": bandwidth,
+              "bandwidth_source": "nominal (--gpu-bandwidth)" if on_gpu else "measured STREAM-like best",
+              "bytes_model": {"lax-wendroff": "6 half-sweeps x (5 read + 5 write) fields x b",
+                              "hllc-muscl": "SSP-RK2: (5+5) + (10+5) fields x b", "b": "8 float64, 4 float32"},
+              "command": " ".join([Path(sys.executable).name] + sys.argv), "date": time.strftime("%Y-%m-%d %H:%M %Z"),
+              "euler_source_sha256": source_hash(), "rows": []}
+    for precision in args.precision:
+        for n in sizes:
+            for scheme in args.schemes:
+                row = spawn({"kind": "3d", "n": n, "scheme": scheme, "repeats": args.repeats,
+                             "min_time": args.min_time, "max_steps": args.max_steps}, precision)
+                row.update(bound(row, bandwidth))
+                report["rows"].append(row)
+                print(f"{row['scheme']:>13} {row['dtype']:>8} {n:4d}^3  {row['cell_steps_per_s']:10.3e} cell-steps/s"
+                      f"  ({row['steps']} steps, best {row['wall_s']:.2f} s, compile {row['compile_s']:.0f} s)"
+                      f"  bound {row['bandwidth_bound_cell_steps_per_s']:.2e}  fraction {row['fraction_of_bound']:.3f}"
+                      f"  XLA {row['xla_bytes_per_cell_step']:.0f} B/cell-step, {row['fused_kernels_per_step']} kernels"
+                      f"  load {row['loadavg_1min_before']:.1f}, cpu/wall {row['process_cpu_s_per_wall_s']:.2f}", flush=True)
+    if args.pyclaw:
+        if not Path(args.pyclaw).exists():
+            subprocess.run([args.pyclaw_python, str(HERE / "bench_pyclaw.py"), "--cells", str(args.pyclaw_cells),
+                            "--out", args.pyclaw], check=True)
+        cmp = spawn({"kind": "compare2d", "npz": args.pyclaw, "cfl": args.cfl, "ref_cells": args.ref_cells,
+                     "repeats": args.repeats_2d})
+        report["pyclaw_compare"] = cmp
+        print(f"2D blast {cmp['grid']}, t = {cmp['t_end']}; reference {cmp['reference']['cells']} cells "
+              f"(L1 vs half resolution {cmp['reference']['l1_vs_half_resolution_reference']:.2e})")
+        for r in cmp["rows"]:
+            print(f"  {r['code'][:60]:<60} {r['steps']:5d} steps  wall {r['wall_s']:7.2f} s  "
+                  f"{r['cell_steps_per_s']:10.3e} cell-steps/s  L1(rho) {r['l1_density']:.4e}", flush=True)
+    if args.profile:
+        report["profile"] = {"size": args.profile, "kernels": spawn({"kind": "profile", "n": args.profile})}
+        for name, r in report["profile"]["kernels"].items():
+            print(f"  {name:<34} {r['ns_per_cell']:8.1f} ns/cell  XLA {r['xla_bytes_per_cell_step']:7.0f} B/cell "
+                  f"{r['xla_flops_per_cell_step']:7.0f} flop/cell  {r['fused_kernels_per_step']} kernels", flush=True)
+    report["euler_source_changed_during_run"] = source_hash() != report["euler_source_sha256"]
+    text = json.dumps(report, indent=2)
+    if args.out:
+        Path(args.out).write_text(text + "\n")
+
+
+if __name__ == "__main__":
+    main()

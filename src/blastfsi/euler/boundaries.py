@@ -1,0 +1,60 @@
+"""Ghost cells by slicing (no jnp.roll), and the stencil helpers of the sweeps.
+
+Kinds (config): outflow = zero-gradient copy of the edge cell; wall, symmetry
+plane and the axis r = 0 = mirror image with the normal vector component
+negated; periodic = the cells of the opposite end.
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from blastfsi.euler.config import OUTFLOW, PERIODIC
+
+
+def _slice(x, axis, start, stop):
+    idx = [slice(None)] * x.ndim
+    idx[axis] = slice(start, stop)
+    return x[tuple(idx)]
+
+
+def _ghosts(x, axis, kind, ng, sign, upper):
+    n = x.shape[axis]
+    if kind == OUTFLOW:
+        edge = _slice(x, axis, n - 1, n) if upper else _slice(x, axis, 0, 1)
+        return jnp.concatenate([edge] * ng, axis=axis)
+    if kind == PERIODIC:
+        return _slice(x, axis, 0, ng) if upper else _slice(x, axis, n - ng, n)
+    g = jnp.flip(_slice(x, axis, n - ng, n) if upper else _slice(x, axis, 0, ng), axis=axis)
+    return g if sign is None else g * sign
+
+
+def pad(x, axis, kinds, ng, sign=None):
+    """``x`` with ``ng`` ghost cells on both sides of array axis ``axis``.
+
+    kinds: (lo, hi) boundary kinds of that axis; sign: None, or a constant
+    broadcastable to x that is -1 on the rows changing sign in a mirror (the
+    velocity or momentum normal to the face) and +1 elsewhere.
+    """
+    lo, hi = kinds
+    return jnp.concatenate([_ghosts(x, axis, lo, ng, sign, False), x, _ghosts(x, axis, hi, ng, sign, True)], axis=axis)
+
+
+def shift(x, axis, start, length):
+    """The ``length`` cells of ``x`` along ``axis`` starting at ``start`` (a stencil offset)."""
+    return _slice(x, axis, start, start + length)
+
+
+def fence(tree, dt):
+    """The arrays of ``tree``, stored in memory instead of being fused (and so recomputed) into every consumer.
+
+    XLA:CPU fuses any chain of elementwise producers into each consumer, and
+    ignores ``lax.optimization_barrier`` when it does; a stencil reading an
+    array at several offsets, or several rows reading one shared face
+    quantity, then recompute the whole chain per read. A conditional is a
+    boundary no fusion crosses. Its predicate is dt being finite: with a
+    non-finite dt every quantity of the step is non-finite anyway, and the
+    other branch returns NaN, so the result is the same either way.
+    """
+    return jax.lax.cond(jnp.isfinite(dt), lambda t: t,
+                        lambda t: jax.tree.map(lambda a: jnp.full_like(a, jnp.nan), t), tree)

@@ -1,0 +1,126 @@
+"""Scheme 0 (the paper's): split two-step Lax-Wendroff with adaptive artificial viscosity, 000 Sec. 2.1.
+
+One directional operator L_a(dt) (:func:`sweep`) is
+
+1. the adaptive viscosity of 000 Eqs. (3)-(5), written in flux (conservative) form,
+
+       U_bar_i = U_i + g+_i D_{i+1/2} - g-_i D_{i-1/2},   D_{i+1/2} = 1/2 k_{i+1/2} (U_{i+1} - U_i),
+       k_{i+1/2} = (k_i + k_{i+1}) / 2,   k_i = eta_i |theta_i|,
+       theta_i = (|rho_{i+1}-rho_i| - |rho_i-rho_{i-1}|) / (|rho_{i+1}-rho_i| + |rho_i-rho_{i-1}|)   Eq. (4), 0/0 -> 0
+       eta_i = nu_i (1 - nu_i),  nu_i = (|u_a| + c)_i dt / dx                                     Eq. (5), ERRATA 000-3
+
+   (g+- = 1 in Cartesian axes, see geometry.py). The face coefficient is the
+   mean of the two cells' coefficients, which makes Eq. (3) conservative
+   without changing its weight in smooth flow. theta enters by its magnitude:
+   at a jump theta = +1 on one side and -1 on the other, so its positive part
+   (ERRATA 000-2) would smooth only one side and break the mirror symmetry of
+   the scheme; |theta| smooths both and is never anti-diffusive
+   (0 <= k/2 <= 1/8 keeps the explicit smoothing stable).
+
+2. the two-step (Richtmyer) Lax-Wendroff scheme on U_bar (ERRATA 000-1: Eq. (7)
+   as printed lacks the flux Jacobian; for a linear flux the two agree):
+
+       U_{i+1/2} = (U_i + U_{i+1})/2 - dt/(2 dx) (F_{i+1} - F_i) - dt/2 (j/r_{i+1/2}) G_{i+1/2}
+       U_i^new  = U_bar_i - dt/dx (g+_i F(U_{i+1/2}) - g-_i F(U_{i-1/2})) + geometric pressure force
+
+   with G the radial flux without the pressure (quasi-1D form, radial axis
+   only) and the pressure force dt/dx (g+ - g-) p_i at the half step,
+   p_i = (p_{i+1/2} + p_{i-1/2})/2. The products fraction follows
+   d alpha/dt + d(alpha u)/dx - alpha du/dx = 0 with the same stencils.
+
+Full step, 000 Eq. (6) with ERRATA 000-4: U^{n+1} = L_z L_y L_x L_x L_y L_z U^n,
+each operator with dt/2 (applied right to left; in 1D two x operators of dt/2).
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from blastfsi.euler import geometry
+from blastfsi.euler.boundaries import fence, pad, shift
+from blastfsi.euler.config import CARTESIAN, Config
+from blastfsi.euler.mixture import cell_state
+
+NG = 3  # ghost cells: viscosity at the cells next to the boundary face needs rho three cells out
+
+
+def _fluxes(rows, p, un, lay, nrm):
+    """Physical flux rows F_a(U); the products-fraction row carries alpha u_a (its conservative part)."""
+    return tuple(x * un + (p if r == nrm else 0.0) + (p * un if r == lay.energy else 0.0) for r, x in enumerate(rows))
+
+
+def sweep(rows, dt, eos_r, cfg: Config, lay, axis: int):
+    """One directional operator L_axis(dt) on a tuple of conservative rows (module docstring)."""
+    n, lam, nrm = cfg.shape[axis], dt / cfg.dx, lay.mom + axis
+    dtype = rows[0].dtype
+    radial = axis == 0 and cfg.geometry != CARTESIAN
+
+    def keep(tree):
+        return fence(tree, dt)
+
+    # 000 Eqs. (3)-(5): adaptive viscosity on cells -1..n (padded index 2..n+3).
+    q = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nrm else None) for r, x in enumerate(rows))
+    st = cell_state(q, eos_r, lay)
+    nu = (jnp.abs(st.velocity[axis]) + jnp.sqrt(jnp.maximum(st.c2, 0.0))) * lam
+    jump = jnp.abs(shift(st.rho, axis, 1, n + 5) - shift(st.rho, axis, 0, n + 5))
+    d_lo, d_hi = shift(jump, axis, 0, n + 4), shift(jump, axis, 1, n + 4)
+    theta = jnp.abs(d_hi - d_lo) / jnp.maximum(d_hi + d_lo, jnp.finfo(dtype).tiny)
+    k_cell = shift(nu * (1.0 - nu), axis, 1, n + 4) * theta
+    k_face = keep(0.25 * (shift(k_cell, axis, 0, n + 3) + shift(k_cell, axis, 1, n + 3)))  # 1/2 of the mean
+    if radial:
+        gp, gm = geometry.flux_factors(cfg, -1, n + 2, dtype)
+    ubar = []
+    for x in q:
+        d = k_face * (shift(x, axis, 2, n + 3) - shift(x, axis, 1, n + 3))
+        d_hi, d_lo = shift(d, axis, 1, n + 2), shift(d, axis, 0, n + 2)
+        ubar.append(shift(x, axis, 2, n + 2) + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
+    ubar = keep(tuple(ubar))
+
+    # Richtmyer predictor at faces -1/2 .. n-1/2.
+    sb = cell_state(ubar, eos_r, lay)
+    f, p, un = keep((_fluxes(ubar, sb.p, sb.velocity[axis], lay, nrm), sb.p, sb.velocity[axis]))
+    if radial:
+        src = 0.25 * lam * geometry.face_source_factor(cfg, 0, n + 1, dtype)
+    half = []
+    for r, (x, fx) in enumerate(zip(ubar, f)):
+        avg = 0.5 * (shift(x, axis, 0, n + 1) + shift(x, axis, 1, n + 1))
+        h = avg - 0.5 * lam * (shift(fx, axis, 1, n + 1) - shift(fx, axis, 0, n + 1))
+        if r == lay.alpha:
+            h = h + 0.5 * lam * avg * (shift(un, axis, 1, n + 1) - shift(un, axis, 0, n + 1))
+        elif radial:
+            g = fx - p if r == nrm else fx  # radial flux without the pressure
+            h = h - src * (shift(g, axis, 0, n + 1) + shift(g, axis, 1, n + 1))
+        half.append(h)
+    half = keep(tuple(half))
+
+    # Corrector on cells 0..n-1.
+    sh = cell_state(half, eos_r, lay)
+    fh, ph, uh = keep((_fluxes(half, sh.p, sh.velocity[axis], lay, nrm), sh.p, sh.velocity[axis]))
+    if radial:
+        gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
+        p_mid = 0.5 * (shift(ph, axis, 0, n) + shift(ph, axis, 1, n))  # pressure force at the half step
+    out = []
+    for r, (x, fx) in enumerate(zip(ubar, fh)):
+        f_hi, f_lo = shift(fx, axis, 1, n), shift(fx, axis, 0, n)
+        if radial and r == nrm:
+            f_hi, f_lo = f_hi - p_mid, f_lo - p_mid
+        new = shift(x, axis, 1, n) - lam * (gp * f_hi - gm * f_lo if radial else f_hi - f_lo)
+        if r == lay.alpha:
+            u_hi, u_lo = shift(uh, axis, 1, n), shift(uh, axis, 0, n)
+            a_mid = 0.5 * (shift(half[r], axis, 0, n) + shift(half[r], axis, 1, n))
+            new = new + lam * a_mid * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
+        out.append(new)
+    return tuple(out)
+
+
+def step(U, dt, eos_r, cfg: Config, lay):
+    """000 Eq. (6): L_z L_y L_x L_x L_y L_z, each operator with dt/2 (ERRATA 000-4).
+
+    The six operators run in a fori_loop that switches between the ndim
+    directional bodies, so each body is compiled once.
+    """
+    ndim = len(cfg.shape)
+    order = jnp.asarray(tuple(reversed(range(ndim))) + tuple(range(ndim)))
+    branches = [lambda rows, a=a: sweep(rows, 0.5 * dt, eos_r, cfg, lay, a) for a in range(ndim)]
+    rows = jax.lax.fori_loop(0, 2 * ndim, lambda i, rows: jax.lax.switch(order[i], branches, rows), tuple(U))
+    return jnp.stack(rows)

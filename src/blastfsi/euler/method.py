@@ -1,0 +1,211 @@
+"""The ``euler`` method behind the driver's face (:class:`blastfsi.method.Method`):
+initial data from :mod:`blastfsi.problems.euler`, the kernels of
+:mod:`blastfsi.euler`, blast maps and gauges of :mod:`blastfsi.diagnostics.blast_maps`."""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+
+from blastfsi import euler as kernels
+from blastfsi import timeloop
+from blastfsi.diagnostics import blast_maps
+from blastfsi.euler.scenario import AXES, EulerScenario
+from blastfsi.method import Grid, register
+from blastfsi.problems import euler as problem
+
+SCHEME_CODE = {"lax-wendroff": kernels.LAX_WENDROFF, "hllc-muscl": kernels.HLLC_MUSCL}
+GEOMETRY_CODE = {"cartesian": kernels.CARTESIAN, "cylindrical": kernels.CYLINDRICAL,
+                 "spherical": kernels.SPHERICAL, "axisymmetric": kernels.CYLINDRICAL}
+
+
+class State(NamedTuple):
+    U: jnp.ndarray  # conservative rows (nvar, *shape), layout of blastfsi.euler.config
+    peak: jnp.ndarray  # blast maps per cell, see blastfsi.diagnostics.blast_maps
+    arrival: jnp.ndarray
+    end: jnp.ndarray
+    impulse: jnp.ndarray
+    last: jnp.ndarray
+    t: jnp.ndarray
+    dt_prev: jnp.ndarray
+    dt0: jnp.ndarray
+    step: jnp.ndarray
+    fault: jnp.ndarray
+    hist: jnp.ndarray
+    hist_next: jnp.ndarray
+
+
+class Params(NamedTuple):
+    kernel: kernels.Params
+    reference_pressure: jnp.ndarray  # overpressure reference [Pa]
+    arrival_threshold: jnp.ndarray  # [Pa]
+
+
+class Static(NamedTuple):
+    cfg: kernels.Config
+    gauge_cells: tuple  # flat (C-order) cell index of each gauge
+
+
+def _maps(s: State) -> blast_maps.BlastMaps:
+    return blast_maps.BlastMaps(s.peak, s.arrival, s.end, s.impulse, s.last)
+
+
+def _pressure(U, params: Params, cfg):
+    return kernels.primitives(U, params.kernel, cfg)["pressure"]
+
+
+class Euler:
+    name = "euler"
+    scenario_model = EulerScenario
+
+    def build(self, sc: EulerScenario) -> problem.Setup:
+        return problem.build(sc)
+
+    def _cfg(self, setup: problem.Setup, sc: EulerScenario) -> kernels.Config:
+        return kernels.Config(shape=setup.grid.shape, dx=float(setup.grid.dx),
+                              geometry=GEOMETRY_CODE[setup.grid.geometry], bc=setup.bc,
+                              scheme=SCHEME_CODE[sc.numerics.scheme], n_materials=len(setup.materials),
+                              origin=tuple(float(v) for v in setup.grid.lower))
+
+    def static(self, setup: problem.Setup, sc: EulerScenario) -> Static:
+        flat = tuple(int(np.ravel_multi_index(c, setup.grid.shape)) for c in setup.gauge_cells)
+        return Static(self._cfg(setup, sc), flat)
+
+    def params(self, setup: problem.Setup, dtype) -> Params:
+        return Params(kernels.Params(jnp.asarray(setup.eos, dtype), jnp.asarray(setup.info["cfl"], dtype)),
+                      jnp.asarray(setup.reference_pressure, dtype),
+                      jnp.asarray(setup.info["arrival_fraction"] * setup.reference_pressure, dtype))
+
+    def initial_state(self, setup: problem.Setup, sc: EulerScenario, n_samples: int, dtype) -> State:
+        static = self.static(setup, sc)
+        params = self.params(setup, dtype)
+        U = kernels.conservative(jnp.asarray(setup.rho_k, dtype), jnp.asarray(setup.alpha[0], dtype),
+                                 jnp.asarray(setup.velocity, dtype), jnp.asarray(setup.pressure, dtype),
+                                 params.kernel, static.cfg)
+        maps = blast_maps.initial(_pressure(U, params, static.cfg) - params.reference_pressure)
+        n_cols = len(self.history_columns(setup, sc))
+        return State(U, *maps, **timeloop.clock(n_samples, n_cols, dtype))
+
+    def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
+        cfg = static.cfg
+        gauges = jnp.asarray(static.gauge_cells, jnp.int32)
+
+        def stable_dt(s):
+            return kernels.stable_dt(s.U, params.kernel, cfg)
+
+        def step(s, dt):
+            U = kernels.step(s.U, dt, params.kernel, cfg)
+            dp = _pressure(U, params, cfg) - params.reference_pressure
+            maps = blast_maps.update(_maps(s), dp, s.t, dt, params.arrival_threshold)
+            return s._replace(U=U, **maps._asdict())
+
+        def history_row(s):
+            prim = kernels.primitives(s.U, params.kernel, cfg)
+            mass, momentum, energy = kernels.total(s.U, cfg)
+            flat = [prim["pressure"].reshape(-1)[gauges] - params.reference_pressure,
+                    prim["rho"].reshape(-1)[gauges]]
+            flat += [prim["velocity"][d].reshape(-1)[gauges] for d in range(len(cfg.shape))]
+            per_gauge = jnp.stack(flat, axis=1).reshape(-1)
+            return jnp.concatenate([jnp.stack([s.t, mass, energy]), momentum, per_gauge])
+
+        return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
+                                  stable_dt=stable_dt, step=step, history_row=history_row)
+
+    def history_columns(self, setup: problem.Setup, sc: EulerScenario) -> tuple:
+        ndim = setup.grid.ndim
+        cols = [("time", "s"), ("mass", _per(ndim, setup.grid.geometry, "kg")),
+                ("energy", _per(ndim, setup.grid.geometry, "J"))]
+        cols += [(f"momentum_{a}", _per(ndim, setup.grid.geometry, "kg*m/s")) for a in AXES[:ndim]]
+        for k in range(len(setup.gauges)):
+            cols += [(f"gauge{k}_overpressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
+            cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:ndim]]
+        return tuple(cols)
+
+    def _cell_fields(self, state: State, setup: problem.Setup, cfg) -> dict:
+        params = self.params(setup, np.asarray(state.U).dtype)
+        prim = {k: np.asarray(v) for k, v in kernels.primitives(jnp.asarray(state.U), params.kernel, cfg).items()}
+        out = {"density": prim["rho"], "pressure": prim["pressure"],
+               "velocity": np.moveaxis(prim["velocity"], 0, -1), "internal_energy": prim["internal_energy"],
+               "sound_speed": prim["sound_speed"]}
+        if len(setup.materials) == 2:
+            out["products_fraction"] = prim["products_fraction"]
+        arrival = np.asarray(state.arrival)
+        out.update(peak_overpressure=np.asarray(state.peak),
+                   arrival_time=np.where(np.isfinite(arrival), arrival, np.nan),
+                   positive_impulse=np.asarray(state.impulse),
+                   positive_duration=np.asarray(blast_maps.duration(_maps(state), state.t)))
+        return out
+
+    def snapshot(self, state: State, setup: problem.Setup) -> Grid:
+        g = setup.grid
+        edges = tuple(lo + np.arange(n + 1) * g.dx for lo, n in zip(g.lower, g.shape))
+        cfg = kernels.Config(g.shape, float(g.dx), GEOMETRY_CODE[g.geometry], setup.bc, 0, len(setup.materials),
+                             tuple(float(v) for v in g.lower))
+        return Grid(edges=edges, cell_fields=self._cell_fields(state, setup, cfg))
+
+    def locate_fault(self, state: State, setup: problem.Setup) -> str:
+        g = setup.grid
+        cfg = kernels.Config(g.shape, float(g.dx), GEOMETRY_CODE[g.geometry], setup.bc, 0, len(setup.materials),
+                             tuple(float(v) for v in g.lower))
+        params = self.params(setup, np.asarray(state.U).dtype)
+        U = jnp.asarray(state.U)
+        flat = int(kernels.first_bad_cell(U, params.kernel, cfg))
+        prim = kernels.primitives(U, params.kernel, cfg)
+        if flat < 0:  # a collapsed step: name the cell with the fastest signal
+            speed = np.asarray(prim["sound_speed"]) + np.max(np.abs(np.asarray(prim["velocity"])), axis=0)
+            flat = int(np.argmax(speed))
+            what = f"fastest signal {speed.reshape(-1)[flat]:.4g} m/s"
+        else:
+            what = (f"density {float(np.asarray(prim['rho']).reshape(-1)[flat]):.4g} kg/m^3, "
+                    f"pressure {float(np.asarray(prim['pressure']).reshape(-1)[flat]):.4g} Pa")
+        idx = np.unravel_index(flat, g.shape)
+        centre = [g.lower[k] + (i + 0.5) * g.dx for k, i in enumerate(idx)]
+        where = ", ".join(f"{a} = {c:.6g} m" for a, c in zip(AXES, centre))
+        return f"cell {tuple(int(i) for i in idx)} at {where} ({what})"
+
+    def summary(self, sc: EulerScenario, setup: problem.Setup, hist: dict, state: State) -> dict:
+        t = float(state.t)
+        out = {"scheme": sc.numerics.scheme, "geometry": setup.grid.geometry, "materials": list(setup.materials),
+               "dx": setup.grid.dx}
+        for q in ("mass", "energy"):
+            first, last = hist[q][0], hist[q][-1]
+            out[f"{q}_change_relative"] = float((last - first) / abs(first)) if first != 0 else None
+        gauges = []
+        for k, (pos, cell) in enumerate(zip(setup.gauges, setup.gauge_cells)):
+            arrival = float(state.arrival[cell])
+            end = float(state.end[cell])
+            gauges.append({
+                "position": [float(v) for v in pos],
+                "peak_overpressure": float(state.peak[cell]),
+                "impulse": float(state.impulse[cell]),
+                "arrival_time": arrival if np.isfinite(arrival) else None,
+                "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None,
+            })
+        out["gauges"] = gauges
+        return out
+
+
+    def plots(self, folder, sc: EulerScenario, histories: list[dict], members: list[dict], finals: list) -> None:
+        """Gauge overpressure histories and the final pressure field (slice z = middle in 3D), member 0."""
+        from blastfsi.plotting.fields import plot_pressure_field
+        from blastfsi.plotting.histories import gauge_histories
+
+        if sc.output.gauges:
+            gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+        grid = finals[0]
+        labels = ("r [m]", "z [m]") if sc.domain.geometry != "cartesian" else ("x [m]", "y [m]", "z [m]")
+        plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
+                            grid.cell_fields["pressure"], axis_labels=labels,
+                            title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s")
+
+
+def _per(ndim: int, geometry: str, unit: str) -> str:
+    if geometry in ("spherical", "axisymmetric") or ndim == 3:
+        return unit
+    if geometry == "cylindrical" or ndim == 2:
+        return f"{unit}/m"
+    return f"{unit}/m^2"
+
+
+METHOD = register(Euler())

@@ -1,0 +1,143 @@
+"""Scenario schema of the Eulerian method (``method = "euler"``).
+
+Geometry is data: the domain, regions, charges and gauges are given in metres;
+``grid.cells`` is the number of cells along x, every cell is a square/cube of
+side dx = (upper - lower)_x / cells, and the other extents must hold a whole
+number of cells.
+
+Axes and geometries:
+
+* ``cartesian`` in 1, 2 or 3 dimensions (x, y, z);
+* ``cylindrical`` / ``spherical``: 1D radial, x is the radius r >= 0;
+* ``axisymmetric``: 2D r-z, x is the radius r >= 0 and y the axial coordinate z.
+"""
+from __future__ import annotations
+
+from typing import Annotated, ClassVar, Literal, Optional, Union
+
+from pydantic import Field, model_validator
+
+from blastfsi.scenario import Numerics as SharedNumerics
+from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, gauge_points
+
+Vector = Union[float, list[float]]
+AXES = ("x", "y", "z")
+BOUNDARY_KINDS = ("outflow", "wall", "symmetry", "axis", "periodic")
+
+
+class GasState(Strict):
+    """A uniform state of one gas from the material library."""
+
+    material: str = Field("air", min_length=1, description="material name from the library (air, tnt, ...)")
+    density: float = Field(gt=0.0, description="density [kg/m^3]")
+    pressure: float = Field(gt=0.0, description="pressure [Pa]")
+    velocity: Vector = Field(0.0, description="velocity [m/s]: x component, or one value per axis")
+
+
+class RiemannInitial(Strict):
+    """Two uniform states separated by a plane x = diaphragm (shock tubes, interface advection)."""
+
+    kind: Literal["riemann"]
+    diaphragm: float = Field(description="x position of the diaphragm [m]")
+    left: GasState
+    right: GasState
+
+
+class PointEnergyInitial(Strict):
+    """Energy released in a small volume around a point of a uniform ambient gas (Sedov)."""
+
+    kind: Literal["point-energy"]
+    ambient: GasState
+    energy: float = Field(gt=0.0, description=(
+        "energy released [J]; per unit length in 2D Cartesian, total (whole sphere/cylinder) otherwise"))
+    center: list[float] = Field(default_factory=list, description="release point [m]; default the origin")
+    radius_cells: float = Field(2.0, ge=0.5, le=50.0, description="release radius in cells (cell-volume weighted)")
+
+
+Initial = Annotated[Union[RiemannInitial, PointEnergyInitial], Field(discriminator="kind")]
+
+
+class Domain(Strict):
+    geometry: Literal["cartesian", "cylindrical", "spherical", "axisymmetric"] = "cartesian"
+    lower: list[float] = Field(min_length=1, max_length=3, description="lower corner [m]")
+    upper: list[float] = Field(min_length=1, max_length=3, description="upper corner [m]")
+
+    @model_validator(mode="after")
+    def _box(self):
+        if len(self.lower) != len(self.upper):
+            raise ValueError(f"domain.lower and domain.upper need the same number of axes "
+                             f"({len(self.lower)} vs {len(self.upper)})")
+        for ax, lo, hi in zip(AXES, self.lower, self.upper):
+            if not hi > lo:
+                raise ValueError(f"domain.upper[{ax}] ({hi}) must exceed domain.lower[{ax}] ({lo})")
+        ndim = len(self.lower)
+        need = {"cylindrical": 1, "spherical": 1, "axisymmetric": 2}.get(self.geometry)
+        if need is not None and ndim != need:
+            raise ValueError(f"domain.geometry = {self.geometry!r} needs {need} axis/axes, got {ndim}")
+        if self.geometry != "cartesian" and self.lower[0] < 0.0:
+            raise ValueError(f"domain.lower[x] is the radius in {self.geometry} geometry and must be >= 0 "
+                             f"(got {self.lower[0]})")
+        return self
+
+    @property
+    def ndim(self) -> int:
+        return len(self.lower)
+
+
+BoundaryPair = Annotated[list[Literal["outflow", "wall", "symmetry", "axis", "periodic"]], Field(min_length=2, max_length=2)]
+
+
+class Boundaries(Strict):
+    """Kind of each face, [lower, upper] per axis: outflow (zero gradient), wall, symmetry, axis, periodic (both faces)."""
+
+    x: BoundaryPair = ["outflow", "outflow"]
+    y: BoundaryPair = ["outflow", "outflow"]
+    z: BoundaryPair = ["outflow", "outflow"]
+
+
+class Grid(Strict):
+    cells: int = Field(ge=4, le=100_000, description="cells along x (square/cubic cells)")
+
+
+class Numerics(SharedNumerics):
+    scheme: Literal["lax-wendroff", "hllc-muscl"] = "hllc-muscl"
+    cfl: float = Field(0.5, gt=0.0, le=1.0, description="Courant number of the full time step")
+
+
+class EulerOutput(Output):
+    arrival_fraction: float = Field(0.01, gt=0.0, le=10.0, description=(
+        "arrival time = first time the overpressure exceeds this fraction of the ambient pressure"))
+
+
+class EulerSweep(Sweep):
+    """Ensemble over the released energy (point-energy) or the Courant number."""
+
+    TARGETS: ClassVar[dict[str, str]] = {"energy": "initial.energy", "cfl": "numerics.cfl"}
+    energy: Optional[list[Annotated[float, Field(gt=0.0)]]] = Field(None, min_length=1)
+    cfl: Optional[list[Annotated[float, Field(gt=0.0, le=1.0)]]] = Field(None, min_length=1)
+
+
+class EulerScenario(ScenarioBase):
+    method: Literal["euler"] = "euler"
+    domain: Domain
+    boundaries: Boundaries = Boundaries()
+    grid: Grid
+    initial: Initial
+    materials: dict[str, dict[str, float]] = Field(
+        default_factory=dict, description="per-material overrides of library constants, e.g. {air = {gamma = 1.3}}")
+    numerics: Numerics = Numerics()
+    output: EulerOutput = EulerOutput()
+    sweep: Optional[EulerSweep] = None
+
+    @model_validator(mode="after")
+    def _inside(self):
+        d = self.domain
+        gauge_points(self.output.gauges, d.ndim, d.lower, d.upper)
+        if self.sweep is not None and self.sweep.energy is not None and self.initial.kind != "point-energy":
+            raise ValueError("sweep.energy needs initial.kind = 'point-energy'")
+        if self.initial.kind == "point-energy" and self.initial.center:
+            c = self.initial.center
+            if len(c) != d.ndim or not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper)):
+                extent = ", ".join(f"{a} in [{lo:g}, {hi:g}]" for a, lo, hi in zip(AXES, d.lower, d.upper))
+                raise ValueError(f"initial.center = {c} must be {d.ndim} coordinate(s) inside the domain ({extent} m)")
+        return self

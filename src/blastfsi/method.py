@@ -1,0 +1,202 @@
+"""The face every solution method shows the driver, and the registry of methods.
+
+A method (``lagrangian1d``, ``euler``, ``mpm``, ``cfdmp``) is a package
+``blastfsi.<name>`` whose module ``blastfsi.<name>.method`` builds an object
+with the :class:`Method` face and calls :func:`register` on it. The driver
+(:mod:`blastfsi.simulation`), the schema (:mod:`blastfsi.scenario`) and the
+Python API import nothing else of a method; :func:`get` imports
+``blastfsi.<name>.method`` the first time the name is asked for.
+
+Life of a run, as the driver sees it (every run is an ensemble of members of
+one method, advanced together by ``jit(vmap(advance))``):
+
+1. ``sc = scenario_model.model_validate(data)`` (through :func:`blastfsi.scenario.parse`);
+2. per member, host side: ``setup = build(sc)``, ``state = initial_state(setup, sc, n_samples, dtype)``,
+   ``params(setup, dtype)``, ``static(setup, sc)``; states and params are stacked
+   along a new leading axis, the static configuration must be equal for all members;
+3. ``advance(state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction)``
+   in compiled chunks, written with :func:`blastfsi.timeloop.run_until`;
+4. on the host between chunks and at the end, per member (arrays without the
+   ensemble axis): ``snapshot``, ``locate_fault`` (after a fault), ``summary``.
+"""
+from __future__ import annotations
+
+import importlib
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar, Hashable, NamedTuple, Protocol, Sequence, Union
+
+import numpy as np
+
+from blastfsi.scenario import ScenarioBase
+from blastfsi.timeloop import CLOCK_FIELDS
+
+VECTOR_FIELDS = ("velocity",)  # fields with a trailing axis of length ndim in Snapshot.as_fields
+
+
+class Setup(Protocol):
+    """What :meth:`Method.build` returns: host-side (NumPy) initial data of one member."""
+
+    info: dict  # JSON-able metadata (theory values, derived quantities), free for the method's summary
+
+    @property
+    def cells(self) -> int:  # total number of cells (zones) of the mesh
+        ...
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Snapshots: the mesh and fields of one member at one time, as written to fields/ and read back.
+# Each kind has a writer in blastfsi.io (results.py: polyline; fields.py: grid, particles) and converts itself
+# to the Python API's field dict with as_fields(): coordinates x (y, z) with the fields' shape, scalar fields
+# as they are, VECTOR_FIELDS with a trailing axis of length ndim.
+# ---------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Polyline:
+    """1D moving mesh: ``nodes`` (N+1,) positions on the x axis, N segments
+    (zones) between them; ``node_fields`` (N+1,) and ``cell_fields`` (N,).
+
+    ``as_fields``: ``x`` the zone centres; cell fields as they are; node fields
+    averaged to the zone centres (velocity as (N, 1)), and the node values
+    themselves as ``node_x`` and ``node_<name>``.
+    """
+
+    kind: ClassVar[str] = "polyline"
+    nodes: np.ndarray
+    node_fields: dict[str, np.ndarray] = field(default_factory=dict)
+    cell_fields: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def as_fields(self) -> dict[str, np.ndarray]:
+        out = {"x": 0.5 * (self.nodes[1:] + self.nodes[:-1]), **self.cell_fields, "node_x": self.nodes}
+        for name, values in self.node_fields.items():
+            centred = 0.5 * (values[1:] + values[:-1])
+            out[name] = centred[:, None] if name in VECTOR_FIELDS else centred
+            out[f"node_{name}"] = values
+        return out
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Cell-centred fields on a rectilinear grid of 1, 2 or 3 dimensions.
+
+    ``edges[i]``: the n_i + 1 cell-edge coordinates along axis i (x, y, z; for
+    axisymmetric r-z grids x = r, y = z); ``cell_fields`` of shape
+    (n_x[, n_y[, n_z]]) for scalars, with a trailing axis of length ndim for
+    VECTOR_FIELDS. ``as_fields``: ``x`` (``y``, ``z``) the cell centres
+    broadcast to the fields' shape (``indexing="ij"``), and the cell fields.
+    """
+
+    kind: ClassVar[str] = "grid"
+    edges: tuple[np.ndarray, ...]
+    cell_fields: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def as_fields(self) -> dict[str, np.ndarray]:
+        centres = [0.5 * (e[1:] + e[:-1]) for e in self.edges]
+        coords = np.meshgrid(*centres, indexing="ij")
+        return {**dict(zip("xyz", coords)), **self.cell_fields}
+
+
+@dataclass(frozen=True)
+class Particles:
+    """Point cloud (active particles only): ``positions`` (P, ndim), ``point_fields``
+    (P,) or (P, ndim) for VECTOR_FIELDS. ``as_fields``: ``x`` (``y``, ``z``) (P,), and the point fields."""
+
+    kind: ClassVar[str] = "particles"
+    positions: np.ndarray
+    point_fields: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def as_fields(self) -> dict[str, np.ndarray]:
+        return {**{a: self.positions[:, i] for i, a in enumerate("xyz"[:self.positions.shape[1]])},
+                **self.point_fields}
+
+
+Snapshot = Union[Polyline, Grid, Particles]
+
+
+class Method(Protocol):
+    """The face of a method. ``state`` is a NamedTuple of arrays that carries the
+    clock fields of :mod:`blastfsi.timeloop` (``CLOCK_FIELDS``, made with
+    ``timeloop.clock``) besides its own; checkpoints save and restore it by
+    field name. Host-side calls get one member's state as NumPy arrays."""
+
+    name: str
+    scenario_model: type[ScenarioBase]  # its pydantic model, with method: Literal[name]
+
+    def build(self, sc) -> Setup:
+        """Host-side initial data of one member; raises ScenarioError for inconsistent input."""
+
+    def initial_state(self, setup: Setup, sc, n_samples: int, dtype) -> NamedTuple:
+        """The initial state (with ``n_samples`` history rows of ``len(history_columns)``)."""
+
+    def params(self, setup: Setup, dtype) -> Any:
+        """Pytree of arrays the step reads (traced: may differ between members)."""
+
+    def static(self, setup: Setup, sc) -> Hashable:
+        """Hashable configuration fixed at compile time; must be equal for all members."""
+
+    def advance(self, state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction):
+        """Pure, jittable, one member: ``timeloop.run_until`` with the method's step."""
+
+    def history_columns(self, setup: Setup, sc) -> Sequence[tuple[str, str]]:
+        """(name, SI unit) of each history column; first ``time``; gauge columns named
+        ``gauge<k>_<quantity>`` (k the index in output.gauges)."""
+
+    def snapshot(self, state, setup: Setup) -> Snapshot:
+        """Mesh and fields of one member (host side)."""
+
+    def summary(self, sc, setup: Setup, history: dict, state) -> dict:
+        """The method's JSON-able summary quantities of one member (the driver adds
+        time, steps, cells, wall_time, compile_time)."""
+
+    def locate_fault(self, state, setup: Setup) -> str:
+        """Where a faulted (or step-collapsed) member fails, e.g. 'zone 12 at x = 0.1 m'."""
+
+    def plots(self, folder: Path, sc, histories: list[dict], members: list[dict], finals: list) -> None:
+        """Write the method's PNG plots into ``folder`` from the histories and the final
+        snapshot of each member (``finals``, as returned by :meth:`snapshot`)."""
+
+
+FACE = ("name", "scenario_model", "build", "initial_state", "params", "static", "advance", "history_columns",
+        "snapshot", "summary", "locate_fault", "plots")
+METHODS: dict[str, Method] = {}
+_PACKAGE = Path(__file__).parent
+
+
+def register(method: Method) -> Method:
+    """Add a method (and with it its scenario model) to the registry."""
+    missing = [n for n in FACE if not hasattr(method, n)]
+    if missing:
+        raise TypeError(f"method {getattr(method, 'name', method)!r} lacks {missing} of the Method face")
+    if not (isinstance(method.scenario_model, type) and issubclass(method.scenario_model, ScenarioBase)):
+        raise TypeError(f"method {method.name!r}: scenario_model must derive from blastfsi.scenario.ScenarioBase "
+                        "(shared name, time, output, numerics and sweep keys)")
+    tags = typing.get_args(method.scenario_model.model_fields["method"].annotation)
+    if tags != (method.name,):
+        raise TypeError(f"method {method.name!r}: its scenario model's `method` key must be "
+                        f"Literal[{method.name!r}], not Literal{list(tags)}")
+    METHODS[method.name] = method
+    return method
+
+
+def available() -> list[str]:
+    """Registered methods and the ``blastfsi.<name>.method`` modules that would register one."""
+    found = {p.parent.name for p in _PACKAGE.glob("*/method.py")}
+    return sorted(found | set(METHODS))
+
+
+def get(name: str) -> Method:
+    """The method registered as ``name``, importing ``blastfsi.<name>.method`` when needed.
+    KeyError (with the available names) for an unknown method."""
+    if name not in METHODS and name.isidentifier() and (_PACKAGE / name / "method.py").is_file():
+        importlib.import_module(f"blastfsi.{name}.method")
+    if name not in METHODS:
+        raise KeyError(f"unknown method {name!r}; available: {', '.join(available())}")
+    return METHODS[name]
+
+
+def check_state(state) -> None:
+    """TypeError unless ``state`` is a NamedTuple carrying the timeloop clock fields."""
+    fields = getattr(state, "_fields", ())
+    missing = [f for f in CLOCK_FIELDS if f not in fields]
+    if missing:
+        raise TypeError(f"a method state must be a NamedTuple with the clock fields {CLOCK_FIELDS}; missing {missing}")

@@ -1,0 +1,94 @@
+"""Grid shape functions N_I(x_p) and their gradients (000 Eq. 16 and GIMP).
+
+Both are tensor products of 1D functions of the scaled distance to a node:
+
+* ``LINEAR``: the hat function of the regular grid, 000 Eq. (16) (the 8-node
+  hexahedron in 3D, bilinear in 2D, linear in 1D): 2 nodes per direction.
+* ``GIMP``: the uniform GIMP function (uGIMP, Bardenhagen & Kober, CMES 5 (2004)
+  477; Steffen, Kirby & Berzins, IJNME 76 (2008) 922, Eq. 13), the hat function
+  averaged over the particle domain [x_p - l, x_p + l] of fixed half-size l
+  (half the initial particle spacing, 0 < l <= h/2): 3 nodes per direction.
+
+Nodes outside the grid get weight 0; particles must stay inside the grid box
+(:func:`blastfsi.mpm.musl.first_fault` reports those that leave), and GIMP
+particles' domains should stay inside it too, else the partition of unity is lost.
+"""
+from __future__ import annotations
+
+import functools
+import operator
+from typing import Callable, NamedTuple
+
+import jax.numpy as jnp
+
+
+class Shape(NamedTuple):
+    name: str
+    nodes_per_dim: int
+    basis: Callable  # (xi (n,), half (n,) in cell units, cells) -> (first node (n,), [N_a (n,)], [dN_a/dxi (n,)])
+
+
+def _linear_basis(xi, half, cells):
+    """000 Eq. (16) in one direction: N = 1 - |xi - i| on the two nodes of the cell."""
+    first = jnp.clip(jnp.floor(xi), 0, cells - 1)
+    f = xi - first
+    one = jnp.ones_like(f)
+    return first.astype(jnp.int32), [1.0 - f, f], [-one, one]
+
+
+def _gimp_basis(xi, half, cells):
+    """uGIMP weight in one direction (Steffen et al. 2008, Eq. 13) in cell units,
+    r = xi - i the particle-to-node distance, l = half:
+    N = 1 - (r^2 + l^2) / (2 l)      for |r| < l
+    N = 1 - |r|                      for l <= |r| < 1 - l
+    N = (1 + l - |r|)^2 / (4 l)      for 1 - l <= |r| < 1 + l, else 0.
+    """
+    first = jnp.floor(xi + 0.5).astype(jnp.int32) - 1
+    l = half
+    N, dN = [], []
+    for a in range(3):
+        r = xi - (first + a)  # particle minus node, cell units
+        d = jnp.abs(r)
+        s = jnp.sign(r)
+        inner, middle, outer = d < l, d < 1.0 - l, d < 1.0 + l
+        N.append(jnp.where(inner, 1.0 - (r * r + l * l) / (2.0 * l),
+                           jnp.where(middle, 1.0 - d, jnp.where(outer, (1.0 + l - d) ** 2 / (4.0 * l), 0.0))))
+        dN.append(jnp.where(inner, -r / l,
+                            jnp.where(middle, -s, jnp.where(outer, -s * (1.0 + l - d) / (2.0 * l), 0.0))))
+    return first, N, dN
+
+
+LINEAR = Shape("linear", 2, _linear_basis)
+GIMP = Shape("gimp", 3, _gimp_basis)
+SHAPES = {s.name: s for s in (LINEAR, GIMP)}
+
+
+def stencil(x, half_size, grid, shape: Shape):
+    """Node indices, weights and weight gradients of every particle.
+
+    x, half_size: (n, 3) positions and GIMP half-sizes [m] (half_size unused by
+    LINEAR). Returns ``idx`` (S, n) flat node indices, ``w`` (S, n) = N_Ip and
+    ``grad``, a tuple of ``dim`` arrays (S, n) = dN_Ip/dx_j, S = nodes_per_dim ** dim.
+    The stencil axis leads (one contiguous row per stencil node): small
+    trailing axes vectorise badly on CPU.
+    """
+    d, h, k, n = grid.dim, grid.cell_size, shape.nodes_per_dim, x.shape[0]
+    idx, weights, slopes = 0, [], []
+    for j in range(d):
+        xi = (x[:, j] - grid.origin[j]) / h
+        first, N, dN = shape.basis(xi, half_size[:, j] / h, grid.cells[j])
+        node = first[None, :] + jnp.arange(k, dtype=first.dtype)[:, None]  # (k, n)
+        valid = (node >= 0) & (node <= grid.cells[j])
+        block = [1] * d + [n]
+        block[j] = k  # direction j varies along axis j of the (k,) * d stencil block
+        idx = idx + (grid.strides[j] * jnp.clip(node, 0, grid.cells[j])).reshape(block)
+        weights.append(jnp.where(valid, jnp.stack(N), 0.0).reshape(block))
+        slopes.append(jnp.where(valid, jnp.stack(dN) / h, 0.0).reshape(block))
+
+    def flat(a):  # (k,) * d + (n,) block -> (S, n), stencil nodes in C order
+        return jnp.broadcast_to(a, (k,) * d + (n,)).reshape(-1, n)
+
+    w = functools.reduce(operator.mul, weights)
+    grad = tuple(flat(functools.reduce(operator.mul, [slopes[i] if i == j else weights[i] for i in range(d)]))
+                 for j in range(d))
+    return flat(idx), flat(w), grad
