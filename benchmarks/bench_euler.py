@@ -1,7 +1,8 @@
 """Throughput of the Eulerian solver (issue 5, item 7). Not run by the tests.
 
     python benchmarks/bench_euler.py --sizes 64 128 --schemes lax-wendroff hllc-muscl \
-        --precision float64 float32 --out benchmarks/results_euler_cpu.json [--pyclaw FILE.npz] [--profile]
+        --precision float64 float32 --out benchmarks/results_euler_cpu.json \
+        [--pyclaw FILE.npz [--grids-2d 560 800]] [--profile N] [--update]
 
 3D rows: the whole step (blastfsi.euler.step) on an n^3 grid, ideal gas
 gamma = 1.4, one material, outflow on all faces, a spherical blast (p = 10
@@ -21,16 +22,20 @@ The bandwidth bound is B / (bytes per cell-step); the fraction reached is the me
 rate over that bound. B: on a CPU the best of a STREAM-like copy and triad measured
 here (NumPy, one thread, and a jitted JAX kernel, all threads; each written byte counted
 once as in STREAM); on a GPU the nominal HBM bandwidth (--gpu-bandwidth, H100 SXM
-3.35e12 B/s) next to the measured one. Also reported, from XLA's cost analysis of the
-compiled loop (its body = one step): bytes accessed, flops and transcendentals per
-cell-step and the number of fused kernels per step -- what the compiled code moves,
-against the model.
+3.35e12 B/s) next to the measured one. Each row also gives the process CPU seconds per wall second of the timed runs
+(2.0 = both cores of this machine busy for us; less = other work shared the cores).
+
+--profile N: through the public API only, a per-kernel trace of one step of each scheme at N^3
+(share of padding/concatenate kernels, the slowest kernels and their ns per output element) and the
+cost of the equation-of-state pass against an ideal gas written directly and a five-field copy, with
+XLA's cost analysis (bytes, flops, transcendentals per cell) of each.
 
 --pyclaw FILE.npz: the 2D blast of bench_pyclaw.py (cylindrical charge, 400^2 cells)
 with both schemes, timed (adaptive CFL step, cfl = --cfl) and compared in L1 density
 error with PyClaw against a 1D cylindrical reference of our own (hllc-muscl,
 --ref-cells cells on r in [0, 1.5]); the file is made with /tmp/clawenv/bin/python
-(--pyclaw-python) when missing.
+(--pyclaw-python) when missing. --grids-2d adds our solves on further grids, to read off the
+grid and the wall time at which our error matches PyClaw's.
 """
 from __future__ import annotations
 
@@ -84,10 +89,10 @@ def _cost(compiled, cells):
     ca = compiled.cost_analysis()
     ca = ca[0] if isinstance(ca, (list, tuple)) else ca
     text = compiled.as_text()
-    return {"xla_bytes_per_cell_step": ca.get("bytes accessed", float("nan")) / cells,
-            "xla_flops_per_cell_step": ca.get("flops", float("nan")) / cells,
-            "xla_transcendentals_per_cell_step": ca.get("transcendentals", float("nan")) / cells,
-            "fused_kernels_per_step": len(re.findall(r"^\s*\S+ = \S+ fusion\(", text, re.M))}
+    return {"xla_bytes_per_cell": ca.get("bytes accessed", float("nan")) / cells,
+            "xla_flops_per_cell": ca.get("flops", float("nan")) / cells,
+            "xla_transcendentals_per_cell": ca.get("transcendentals", float("nan")) / cells,
+            "fused_kernels": len(re.findall(r"^\s*\S+ = \S+ fusion\(", text, re.M))}
 
 
 def _time(fn, args, repeats):
@@ -125,7 +130,6 @@ def bench_3d(n, scheme, repeats, min_time, max_steps):
            "finite": bool(jnp.all(jnp.isfinite(out))), "process_cpu_s_per_wall_s": cpu_per_wall,
            "loadavg_1min_before": load0,
            "loadavg_1min_after": os.getloadavg()[0]}
-    row.update(_cost(compiled, cells))
     return row
 
 
@@ -173,74 +177,110 @@ def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats):
             "compile_s": compile_s}
 
 
-def compare_2d(pyclaw_npz, cfl, ref_cells, repeats):
-    """Our 2D blast (both schemes) and PyClaw's against a 1D cylindrical reference (module docstring)."""
+def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids):
+    """Our 2D blast (both schemes; PyClaw's grid, then extra_grids) and PyClaw's against a 1D cylindrical
+    reference (module docstring)."""
     _, _, np, euler, _ = _jax_setup()
     claw = np.load(pyclaw_npz)
-    n = int(claw["density"].shape[0])
-    refs = {}
-    for m in (ref_cells // 2, ref_cells):
-        r = _solve((m,), 0.0, R_MAX_REF, euler.HLLC_MUSCL, euler.CYLINDRICAL, ((euler.AXIS, euler.OUTFLOW),), cfl,
-                   T_END_2D, 1)
-        refs[m] = r
+    n_claw = int(claw["density"].shape[0])
+    refs = {m: _solve((m,), 0.0, R_MAX_REF, euler.HLLC_MUSCL, euler.CYLINDRICAL, ((euler.AXIS, euler.OUTFLOW),),
+                      cfl, T_END_2D, 1) for m in (ref_cells // 2, ref_cells)}
+    ref, half = refs[ref_cells], refs[ref_cells // 2]
 
-    def l1(rho, xc, yc, ref):
+    def l1(rho, xc, yc, r):
         """Mean |rho - rho_ref(r)| over the square (= L1 norm / area)."""
-        return float(np.mean(np.abs(rho - np.interp(np.hypot(xc, yc), ref["axes"][0], ref["rho"]))))
+        return float(np.mean(np.abs(rho - np.interp(np.hypot(xc, yc), r["axes"][0], r["rho"]))))
 
-    ref = refs[ref_cells]
     rows = []
-    for scheme, code in SCHEMES.items():
-        s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, cfl, T_END_2D, repeats)
-        xc, yc = np.meshgrid(*s["axes"], indexing="ij")
-        rows.append({"code": f"blastfsi {scheme}", "cfl": cfl, "steps": s["steps"], "t_end": s["t"],
-                     "wall_s": s["wall_s"], "walls_s": s["walls_s"], "compile_s": s["compile_s"],
-                     "cell_steps_per_s": n * n * s["steps"] / s["wall_s"], "l1_density": l1(s["rho"], xc, yc, ref)})
-    rows.append({"code": "pyclaw " + str(claw["solver"]), "cfl": "0.9 desired / 1.0 max", "steps": int(claw["steps"]),
-                 "t_end": float(claw["time"]), "wall_s": float(claw["wall_s"]),
+    for n in [n_claw] + list(extra_grids):
+        for scheme, code in SCHEMES.items():
+            s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, cfl, T_END_2D,
+                       repeats)
+            xc, yc = np.meshgrid(*s["axes"], indexing="ij")
+            rows.append({"code": f"blastfsi {scheme}", "grid": n, "cfl": cfl, "steps": s["steps"], "t_end": s["t"],
+                         "wall_s": s["wall_s"], "walls_s": s["walls_s"], "compile_s": s["compile_s"],
+                         "cell_steps_per_s": n * n * s["steps"] / s["wall_s"],
+                         "l1_density": l1(s["rho"], xc, yc, ref)})
+    rows.append({"code": "pyclaw " + str(claw["solver"]), "grid": n_claw, "cfl": "0.9 desired / 1.0 max",
+                 "steps": int(claw["steps"]), "t_end": float(claw["time"]), "wall_s": float(claw["wall_s"]),
                  "walls_s": [float(w) for w in claw["walls_s"]], "cell_steps_per_s": float(claw["cell_steps_per_s"]),
                  "l1_density": l1(claw["density"], claw["x"], claw["y"], ref)})
-    half = refs[ref_cells // 2]
-    xc, yc = np.meshgrid(*s["axes"], indexing="ij")
-    ref_err = float(np.mean(np.abs(np.interp(np.hypot(xc, yc), half["axes"][0], half["rho"])
-                                   - np.interp(np.hypot(xc, yc), ref["axes"][0], ref["rho"]))))
-    return {"grid": f"{n}x{n} on [-1,1]^2", "t_end": T_END_2D, "blast": BLAST,
+    return {"grid": f"{n_claw}x{n_claw} on [-1,1]^2", "t_end": T_END_2D, "blast": BLAST,
             "reference": {"cells": ref_cells, "r_max": R_MAX_REF, "scheme": "hllc-muscl, 1D cylindrical",
                           "steps": ref["steps"], "wall_s": ref["wall_s"],
-                          "l1_vs_half_resolution_reference": ref_err},
+                          "l1_vs_half_resolution_reference": l1(np.interp(np.hypot(xc, yc), half["axes"][0],
+                                                                          half["rho"]), xc, yc, ref)},
             "rows": rows}
 
 
+def _trace_breakdown(compiled, args, top):
+    """Per-op wall time of one call from a JAX profiler trace (XLA:CPU records one event per kernel):
+    shares of padding (fusions with a concatenate), copies and the other fusions, and the ``top`` slowest ops
+    with their time per output element."""
+    import glob
+    import gzip
+    import tempfile
+    import jax
+    import numpy as np
+    hlo = compiled.as_text()
+    elems = {m.group(1): int(np.prod([int(v) for v in m.group(2).split(",") if v]))
+             for m in re.finditer(r"^\s*%?(\S+) = \w+\[([\d,]*)\]", hlo, re.M)}
+    with tempfile.TemporaryDirectory() as tmp:
+        with jax.profiler.trace(tmp, create_perfetto_trace=True):
+            jax.block_until_ready(compiled(*args))
+        events = json.load(gzip.open(glob.glob(f"{tmp}/**/*.trace.json.gz", recursive=True)[0]))["traceEvents"]
+    per = {}
+    for e in events:
+        if e.get("ph") == "X" and e["name"] in elems and not e["name"].startswith(("while", "cond", "call")):
+            dur, count = per.get(e["name"], (0.0, 0))
+            per[e["name"]] = (dur + e["dur"], count + 1)
+    total = sum(d for d, _ in per.values())
+    shares = {"padding (concatenate fusions)": 0.0, "copies": 0.0, "other fusions": 0.0}
+    for name, (dur, _) in per.items():
+        key = "copies" if name.startswith("copy") else (
+            "padding (concatenate fusions)" if "concatenate" in name else "other fusions")
+        shares[key] += dur / total
+    slow = sorted(per.items(), key=lambda kv: -kv[1][0])[:top]
+    return {"kernel_time_ms": total / 1e3, "shares": shares,
+            "slowest": [{"op": k, "ms": d / 1e3, "calls": c, "ns_per_output_element": 1e3 * d / c / elems[k]}
+                        for k, (d, c) in slow]}
+
+
 def profile(n):
-    """Sub-kernel timings at n^3 (float per the process precision): one LW sweep per axis, the HLLC
-    right-hand side, the cell-state (EOS) pass and a five-field copy, each jitted alone."""
+    """Where a step's time goes at n^3 (process precision), through the public API only: a per-kernel trace
+    of one whole step of each scheme, and the cost of the equation of state -- p and c from
+    euler.primitives (the JWL-row mixture closure every kernel evaluates, here with A = B = 0), the same
+    two written directly for an ideal gas, and a five-field scaling (the memory floor of one pass)."""
     jax, jnp, np, euler, _ = _jax_setup()
-    from blastfsi.euler import hllc, lax_wendroff
-    from blastfsi.euler.config import layout
-    from blastfsi.euler.mixture import cell_state, eos_rows
     cfg, params, U, _ = _blast_state((n, n, n), -1.0, 1.0, 0, 0, ((0, 0),) * 3, 0.5)
-    lay = layout(cfg)
     dt = 0.5 * euler.stable_dt(U, params, cfg)
     cells = n ** 3
-    out = {}
+    gamma = BLAST["gamma"]
+    out = {"kernels": {}, "step_traces": {}}
 
     def rec(name, fn, *args):
         compiled = jax.jit(fn).lower(*args).compile()
         _time(compiled, args, 1)
         wall = min(_time(compiled, args, 5))
-        out[name] = {"ns_per_cell": 1e9 * wall / cells}
-        out[name].update(_cost(compiled, cells))
+        out["kernels"][name] = {"ns_per_cell": 1e9 * wall / cells, **_cost(compiled, cells)}
 
-    def sweep(axis):
-        return lambda u, dt, eos: lax_wendroff.sweep(u, 0.5 * dt, eos_rows(eos, 1), cfg, lay, axis)
+    def p_plus_c(u, prm):
+        prim = euler.primitives(u, prm, cfg)
+        return prim["pressure"] + prim["sound_speed"]
 
-    for axis in range(3):
-        rec(f"lax-wendroff sweep axis {axis}", sweep(axis), U, dt, params.eos)
-    cfg_h = cfg._replace(scheme=1)
-    rec("hllc-muscl rhs (3 axes)", lambda u, eos: hllc.rhs(u, eos_rows(eos, 1), cfg_h, lay), U, params.eos)
-    rec("cell_state (EOS pass: p, c^2)", lambda u, eos: (lambda st: jnp.stack((st.p, st.c2)))(
-        cell_state(u, eos_rows(eos, 1), lay)), U, params.eos)
-    rec("copy of five fields", lambda u: u * 1.0000001, U)
+    def ideal_p_plus_c(u):
+        p = (gamma - 1.0) * (u[4] - 0.5 * (u[1] ** 2 + u[2] ** 2 + u[3] ** 2) / u[0])
+        return p + jnp.sqrt(gamma * p / u[0])
+
+    rec("p + c via euler.primitives (JWL rows)", p_plus_c, U, params)
+    rec("p + c, ideal gas written directly", ideal_p_plus_c, U)
+    rec("five-field scaling (memory floor)", lambda u: u * 1.0000001, U)
+    for scheme, code in SCHEMES.items():
+        c = cfg._replace(scheme=code)
+        compiled = jax.jit(lambda u, dt, p, c=c: euler.step(u, dt, p, c)).lower(U, dt, params).compile()
+        _time(compiled, (U, dt, params), 1)
+        out["step_traces"][scheme] = {"ns_per_cell_step": 1e9 * min(_time(compiled, (U, dt, params), 3)) / cells,
+                                      **_trace_breakdown(compiled, (U, dt, params), 8)}
     return out
 
 
@@ -250,7 +290,7 @@ def worker(task):
     if task["kind"] == "3d":
         return bench_3d(task["n"], task["scheme"], task["repeats"], task["min_time"], task["max_steps"])
     if task["kind"] == "compare2d":
-        return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"])
+        return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"], task["extra_grids"])
     if task["kind"] == "profile":
         return profile(task["n"])
     raise ValueError(f"unknown worker task kind {task['kind']!r}")
@@ -283,15 +323,70 @@ def bound(row, bandwidth):
             "fraction_of_bound": row["cell_steps_per_s"] / limit}
 
 
+def run_info(started_hash):
+    """When, with what command and on which kernel sources a section was measured."""
+    return {"date": time.strftime("%Y-%m-%d %H:%M %Z"), "command": " ".join(["python"] + sys.argv),
+            "euler_source_sha256": started_hash, "euler_source_changed_during_run": source_hash() != started_hash}
+
+
+def section_3d(args, sizes, bandwidth):
+    started, rows = source_hash(), []
+    for precision in args.precision:
+        for n in sizes:
+            for scheme in args.schemes:
+                row = spawn({"kind": "3d", "n": n, "scheme": scheme, "repeats": args.repeats,
+                             "min_time": args.min_time, "max_steps": args.max_steps}, precision)
+                row.update(bound(row, bandwidth))
+                rows.append(row)
+                print(f"{row['scheme']:>13} {row['dtype']:>8} {n:4d}^3  {row['cell_steps_per_s']:10.3e} cell-steps/s"
+                      f"  ({row['steps']} steps, best {row['wall_s']:.2f} s, compile {row['compile_s']:.0f} s)"
+                      f"  bound {row['bandwidth_bound_cell_steps_per_s']:.2e}  fraction {row['fraction_of_bound']:.3f}"
+                      f"  load {row['loadavg_1min_before']:.1f}, cpu/wall {row['process_cpu_s_per_wall_s']:.2f}",
+                      flush=True)
+    return {"run": run_info(started), "rows": rows}
+
+
+def section_pyclaw(args):
+    started = source_hash()
+    if not Path(args.pyclaw).exists():
+        subprocess.run([args.pyclaw_python, str(HERE / "bench_pyclaw.py"), "--cells", str(args.pyclaw_cells),
+                        "--out", args.pyclaw], check=True)
+    cmp = spawn({"kind": "compare2d", "npz": args.pyclaw, "cfl": args.cfl, "ref_cells": args.ref_cells,
+                 "repeats": args.repeats_2d, "extra_grids": args.grids_2d})
+    print(f"2D blast {cmp['grid']}, t = {cmp['t_end']}; reference {cmp['reference']['cells']} cells "
+          f"(L1 vs half resolution {cmp['reference']['l1_vs_half_resolution_reference']:.2e})")
+    for r in cmp["rows"]:
+        print(f"  {r['code'][:60]:<60} {r['grid']:4d}^2 {r['steps']:5d} steps  wall {r['wall_s']:7.2f} s  "
+              f"{r['cell_steps_per_s']:10.3e} cell-steps/s  L1(rho) {r['l1_density']:.4e}", flush=True)
+    return {"run": run_info(started), **cmp}
+
+
+def section_profile(n):
+    started = source_hash()
+    prof = spawn({"kind": "profile", "n": n})
+    print(f"profile at {n}^3 (float64), each part jitted alone:")
+    for name, r in prof["kernels"].items():
+        print(f"  {name:<38} {r['ns_per_cell']:8.1f} ns/cell  XLA {r['xla_bytes_per_cell']:7.0f} B/cell "
+              f"{r['xla_flops_per_cell']:7.0f} flop/cell  {r['fused_kernels']:3d} kernels", flush=True)
+    for scheme, tr in prof["step_traces"].items():
+        shares = ", ".join(f"{k} {100 * v:.0f}%" for k, v in tr["shares"].items())
+        print(f"  one {scheme} step: {tr['ns_per_cell_step']:.0f} ns/cell-step, {tr['kernel_time_ms']:.0f} ms "
+              f"in kernels: {shares}")
+        for op in tr["slowest"]:
+            print(f"      {op['op']:<34} {op['ms']:8.1f} ms  {op['calls']} calls  "
+                  f"{op['ns_per_output_element']:6.1f} ns/output element")
+    return {"run": run_info(started), "size": n, **prof}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sizes", type=int, nargs="+", default=None, help="cells per axis (default 64 128, +256 --gpu)")
+    ap.add_argument("--sizes", type=int, nargs="*", default=None,
+                    help="cells per axis (default 64 128, and 256 on a GPU; none: skip the 3D rows)")
     ap.add_argument("--schemes", nargs="+", choices=sorted(SCHEMES), default=list(SCHEMES))
     ap.add_argument("--precision", nargs="+", choices=("float64", "float32"), default=["float64", "float32"])
-    ap.add_argument("--gpu", action="store_true", help="add 256^3; bound from --gpu-bandwidth")
+    ap.add_argument("--gpu", action="store_true", help="bound from --gpu-bandwidth, default sizes with 256")
     ap.add_argument("--gpu-bandwidth", type=float, default=H100_BANDWIDTH)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--repeats-2d", type=int, default=2, help="timed runs of each 2D comparison solve")
     ap.add_argument("--min-time", type=float, default=2.0, help="seconds per timed run (chooses N)")
     ap.add_argument("--max-steps", type=int, default=500)
     ap.add_argument("--pyclaw", default=None, help="PyClaw .npz of bench_pyclaw.py; runs the 2D comparison")
@@ -299,8 +394,11 @@ def main():
     ap.add_argument("--pyclaw-cells", type=int, default=400)
     ap.add_argument("--cfl", type=float, default=0.5, help="Courant number of the 2D comparison (scenario default)")
     ap.add_argument("--ref-cells", type=int, default=20000)
-    ap.add_argument("--profile", type=int, default=None, metavar="N", help="sub-kernel timings at N^3 (float64)")
+    ap.add_argument("--grids-2d", type=int, nargs="*", default=[], help="further grids for our 2D solves")
+    ap.add_argument("--repeats-2d", type=int, default=2, help="timed runs of each 2D comparison solve")
+    ap.add_argument("--profile", type=int, default=None, metavar="N", help="per-kernel profile at N^3 (float64)")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--update", action="store_true", help="keep the sections of --out that this run does not make")
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker is not None:
@@ -311,47 +409,21 @@ def main():
     on_gpu = args.gpu or "cpu" not in st["device"].lower()
     measured = max(v for k, v in st.items() if k != "device")
     bandwidth = args.gpu_bandwidth if on_gpu else measured
-    sizes = args.sizes or ([64, 128, 256] if on_gpu else [64, 128])
-    report = {"machine": platform.processor() or platform.machine(), "cpu_count": os.cpu_count(),
-              "device": st["device"], "stream_bytes_per_s": st, "bandwidth_used_bytes_per_s": bandwidth,
-              "bandwidth_source": "nominal (--gpu-bandwidth)" if on_gpu else "measured STREAM-like best",
-              "bytes_model": {"lax-wendroff": "6 half-sweeps x (5 read + 5 write) fields x b",
-                              "hllc-muscl": "SSP-RK2: (5+5) + (10+5) fields x b", "b": "8 float64, 4 float32"},
-              "command": " ".join([Path(sys.executable).name] + sys.argv), "date": time.strftime("%Y-%m-%d %H:%M %Z"),
-              "euler_source_sha256": source_hash(), "rows": []}
-    for precision in args.precision:
-        for n in sizes:
-            for scheme in args.schemes:
-                row = spawn({"kind": "3d", "n": n, "scheme": scheme, "repeats": args.repeats,
-                             "min_time": args.min_time, "max_steps": args.max_steps}, precision)
-                row.update(bound(row, bandwidth))
-                report["rows"].append(row)
-                print(f"{row['scheme']:>13} {row['dtype']:>8} {n:4d}^3  {row['cell_steps_per_s']:10.3e} cell-steps/s"
-                      f"  ({row['steps']} steps, best {row['wall_s']:.2f} s, compile {row['compile_s']:.0f} s)"
-                      f"  bound {row['bandwidth_bound_cell_steps_per_s']:.2e}  fraction {row['fraction_of_bound']:.3f}"
-                      f"  XLA {row['xla_bytes_per_cell_step']:.0f} B/cell-step, {row['fused_kernels_per_step']} kernels"
-                      f"  load {row['loadavg_1min_before']:.1f}, cpu/wall {row['process_cpu_s_per_wall_s']:.2f}", flush=True)
+    sizes = ([64, 128, 256] if on_gpu else [64, 128]) if args.sizes is None else args.sizes
+    report = json.loads(Path(args.out).read_text()) if args.update and args.out and Path(args.out).exists() else {}
+    report.update({"machine": platform.processor() or platform.machine(), "cpu_count": os.cpu_count(),
+                   "device": st["device"], "stream_bytes_per_s": st, "bandwidth_used_bytes_per_s": bandwidth,
+                   "bandwidth_source": "nominal (--gpu-bandwidth)" if on_gpu else "measured STREAM-like best",
+                   "bytes_model": {"lax-wendroff": "6 half-sweeps x (5 read + 5 write) fields x b",
+                                   "hllc-muscl": "SSP-RK2: (5+5) + (10+5) fields x b", "b": "8 float64, 4 float32"}})
+    if sizes:
+        report["throughput_3d"] = section_3d(args, sizes, bandwidth)
     if args.pyclaw:
-        if not Path(args.pyclaw).exists():
-            subprocess.run([args.pyclaw_python, str(HERE / "bench_pyclaw.py"), "--cells", str(args.pyclaw_cells),
-                            "--out", args.pyclaw], check=True)
-        cmp = spawn({"kind": "compare2d", "npz": args.pyclaw, "cfl": args.cfl, "ref_cells": args.ref_cells,
-                     "repeats": args.repeats_2d})
-        report["pyclaw_compare"] = cmp
-        print(f"2D blast {cmp['grid']}, t = {cmp['t_end']}; reference {cmp['reference']['cells']} cells "
-              f"(L1 vs half resolution {cmp['reference']['l1_vs_half_resolution_reference']:.2e})")
-        for r in cmp["rows"]:
-            print(f"  {r['code'][:60]:<60} {r['steps']:5d} steps  wall {r['wall_s']:7.2f} s  "
-                  f"{r['cell_steps_per_s']:10.3e} cell-steps/s  L1(rho) {r['l1_density']:.4e}", flush=True)
+        report["pyclaw_compare"] = section_pyclaw(args)
     if args.profile:
-        report["profile"] = {"size": args.profile, "kernels": spawn({"kind": "profile", "n": args.profile})}
-        for name, r in report["profile"]["kernels"].items():
-            print(f"  {name:<34} {r['ns_per_cell']:8.1f} ns/cell  XLA {r['xla_bytes_per_cell_step']:7.0f} B/cell "
-                  f"{r['xla_flops_per_cell_step']:7.0f} flop/cell  {r['fused_kernels_per_step']} kernels", flush=True)
-    report["euler_source_changed_during_run"] = source_hash() != report["euler_source_sha256"]
-    text = json.dumps(report, indent=2)
+        report["profile"] = section_profile(args.profile)
     if args.out:
-        Path(args.out).write_text(text + "\n")
+        Path(args.out).write_text(json.dumps(report, indent=2) + "\n")
 
 
 if __name__ == "__main__":

@@ -109,7 +109,7 @@ class Decay:
     def locate_fault(self, state, setup):
         return f"cell {int(np.argmin(state.y))}"
 
-    def plots(self, folder, sc, histories, members, finals):
+    def plots(self, folder, sc, setups, histories, members, finals):
         (folder / "decay.txt").write_text("no plot\n")
 
 

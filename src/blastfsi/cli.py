@@ -1,4 +1,4 @@
-"""Command line: ``blastfsi run``, ``blastfsi examples`` (a thin layer over :mod:`blastfsi.api`)."""
+"""Command line: ``blastfsi run``, ``blastfsi examples``, ``blastfsi kb`` (a thin layer over :mod:`blastfsi.api`)."""
 from __future__ import annotations
 
 import argparse
@@ -37,7 +37,30 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--json", action="store_true", help="print the summary as one JSON object on stdout")
     r.add_argument("--overwrite", action="store_true", help="allow reusing a non-empty --out directory")
     sub.add_parser("examples", help="list the shipped examples")
+    kb = sub.add_parser("kb", help="Kingery-Bulmash blast parameters of a TNT charge")
+    kb.add_argument("--mass", type=float, required=True, metavar="KG", help="TNT mass [kg]")
+    kb.add_argument("--distance", type=float, required=True, metavar="M", help="distance from the charge [m]")
+    kb.add_argument("--burst", choices=("free-air", "surface"), default="free-air",
+                    help="spherical free-air burst or hemispherical surface burst")
+    kb.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     return p
+
+
+def _kb(args) -> int:
+    from blastfsi.exact.kingery_bulmash import kb_report
+
+    try:
+        report = kb_report(args.mass, args.distance, args.burst)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_SCENARIO
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    units = report.pop("units")
+    for key, value in report.items():
+        print(f"{key:28s} {value:.6g} {units.get(key, '')}" if isinstance(value, float) else f"{key:28s} {value}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -46,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
         for name, text in example_names().items():
             print(f"{name:24s} {text}")
         return 0
+    if args.command == "kb":
+        return _kb(args)
     try:
         return _run(args)
     except ScenarioError as err:

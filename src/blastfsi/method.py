@@ -151,9 +151,10 @@ class Method(Protocol):
     def locate_fault(self, state, setup: Setup) -> str:
         """Where a faulted (or step-collapsed) member fails, e.g. 'zone 12 at x = 0.1 m'."""
 
-    def plots(self, folder: Path, sc, histories: list[dict], members: list[dict], finals: list) -> None:
-        """Write the method's PNG plots into ``folder`` from the histories and the final
-        snapshot of each member (``finals``, as returned by :meth:`snapshot`)."""
+    def plots(self, folder: Path, sc, setups: list, histories: list[dict], members: list[dict],
+              finals: list) -> None:
+        """Write the method's PNG plots into ``folder`` from each member's setup, history
+        and final snapshot (``finals``, as returned by :meth:`snapshot`)."""
 
 
 FACE = ("name", "scenario_model", "build", "initial_state", "params", "static", "advance", "history_columns",

@@ -276,7 +276,7 @@ def _write_outputs(out: Path, res: Result, columns, finals: list) -> None:
             results.write_series(out, k, res.snapshots, res.method.snapshot(finals[k], res.setups[k]))
     results.write_summary(out, res.summary)
     if res.scenario.output.plots:
-        res.method.plots(out / "plots", res.scenario, res.histories, res.members,
+        res.method.plots(out / "plots", res.scenario, res.setups, res.histories, res.members,
                          [res.method.snapshot(f, u) for f, u in zip(finals, res.setups)])
 
 

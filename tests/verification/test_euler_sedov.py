@@ -2,9 +2,9 @@
 2D and 3D Cartesian geometry against the exact front (exact/sedov.py), and the 3D
 solution's symmetry under axis permutation.
 
-Tolerance: the captured front (mid-jump, diagnostics.fronts) sits within about one
-cell of the exact front at first order; the issue's target is 1 % at the finest
-grid, which at these resolutions is 1-3 cells."""
+The captured front is the mid-height of the captured density jump (diagnostics.fronts,
+biased outward by up to 1-2 cells where the clipped Sedov peak is coarse). Tolerance: the
+issue's target, 1 % at the finest grid run here."""
 import numpy as np
 import pytest
 
@@ -26,8 +26,7 @@ def _radial_error(example, cells, blast, line):
 @pytest.mark.slow
 @pytest.mark.parametrize("example, cells, blast, line", [
     ("sedov-spherical", 400, "spherical", lambda f: (f["x"], f["density"])),
-    ("sedov-axisym", 120, "spherical", lambda f: (f["x"][:, f["x"].shape[1] // 2],
-                                                  f["density"][:, f["x"].shape[1] // 2])),
+    ("sedov-axisym", 240, "spherical", lambda f: (f["x"][:, 0], f["density"][:, 0])),
     ("sedov-2d", 192, "cylindrical", lambda f: (f["x"][f["x"].shape[0] // 2:, f["x"].shape[1] // 2],
                                                 f["density"][f["x"].shape[0] // 2:, f["x"].shape[1] // 2])),
 ])

@@ -248,16 +248,17 @@ def test_piston_shock_in_air_particles(shape):
     h = length / cells
     grid = mpm.Grid(origin=(0.0,), cell_size=h, cells=(cells,), boundaries=(("free", "fixed"),))
     x, vol, half = mpm.lattice(grid, (0.0,), (length,), 2)
-    piston = x[:, 0] < 5 * h
-    n = len(vol)
     gas = FluidParams(ideal_gas_params(gamma), 0.0)
-    stress = np.zeros((n, 6))
-    stress[:, :3] = -p0
-    batch = mpm.new_particles(x, vol, rho0, half_size=half, energy=e0, stress=stress, history_size=3,
-                              prescribed=np.where(piston[:, None], [u_p, 0.0, 0.0], 0.0))
-    pool = mpm.make_pool(batch._replace(prescribed=jnp.asarray(piston)), n)
+
+    def body(where, **kw):  # the piston (first 5 cells) and the air, both of air at rest
+        return mpm.new_particles(x[where], vol[where], rho0, half_size=half[where], energy=e0,
+                                 stress=[-p0, -p0, -p0, 0.0, 0.0, 0.0], history_size=3, **kw)
+
+    pool = mpm.make_pool(mpm.concatenate(body(x[:, 0] < 5 * h, prescribed=[u_p]), body(x[:, 0] > 5 * h)), len(vol))
+    piston = np.asarray(pool.prescribed)
     cfg = mpm.make_config(grid, (FLUID,), shape=shape, prescribed=True)
     prm = mpm.make_params((gas,), cfl=0.5)
+    mpm.check_particles(pool, cfg)
     state = mpm.initialize(pool, prm, cfg)
     t_end = 0.5 * length / U_s
     state1, _, _, _ = run(state, prm, cfg, t_end, record=external_work)
@@ -269,7 +270,7 @@ def test_piston_shock_in_air_particles(shape):
     pressure = -np.asarray(p.point.stress[:, 0])
     front = np.max(xs[~piston & (pressure > 0.5 * (p0 + p1))])  # the last particle above mid-pressure
     assert abs(front - shock) < 3 * h
-    spacing = np.empty(n)
+    spacing = np.empty(len(xs))
     spacing[order[1:-1]] = 0.5 * (xs[order][2:] - xs[order][:-2])
     assert np.mean(np.asarray(p.mass)[plateau] / spacing[plateau]) == pytest.approx(rho1, rel=0.03)
     if shape == "gimp":

@@ -5,11 +5,13 @@ import numpy as np
 
 
 def front_radius(r: np.ndarray, rho: np.ndarray, ambient: float) -> float:
-    """Outermost position where the density crosses half-way between its peak and the
-    ambient value, linearly interpolated between samples (r increasing outward).
+    """Outermost position where the density falls through the mid-height between its
+    (captured) peak and the ambient value, linearly interpolated (r increasing outward).
 
-    For a captured shock spread over a few cells this is the middle of the jump,
-    which converges to the exact front position at first order in the cell size.
+    For a shock spread over a few cells this is the middle of the captured jump. Where
+    the post-shock profile decays steeply (Sedov) the captured peak is clipped on coarse
+    grids and this estimate lies up to about one to two cells ahead of the exact front;
+    the bias vanishes at first order in the cell size.
     """
     r, rho = np.asarray(r, float), np.asarray(rho, float)
     k_peak = int(np.argmax(rho))

@@ -1,4 +1,4 @@
-"""Ghost cells by slicing (no jnp.roll), and the stencil helpers of the sweeps.
+"""Ghost cells by slicing (no jnp.roll), and the stencil offset helper.
 
 Kinds (config): outflow = zero-gradient copy of the edge cell; wall, symmetry
 plane and the axis r = 0 = mirror image with the normal vector component
@@ -6,7 +6,6 @@ negated; periodic = the cells of the opposite end.
 """
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
 from blastfsi.euler.config import OUTFLOW, PERIODIC
@@ -44,17 +43,3 @@ def shift(x, axis, start, length):
     """The ``length`` cells of ``x`` along ``axis`` starting at ``start`` (a stencil offset)."""
     return _slice(x, axis, start, start + length)
 
-
-def fence(tree, dt):
-    """The arrays of ``tree``, stored in memory instead of being fused (and so recomputed) into every consumer.
-
-    XLA:CPU fuses any chain of elementwise producers into each consumer, and
-    ignores ``lax.optimization_barrier`` when it does; a stencil reading an
-    array at several offsets, or several rows reading one shared face
-    quantity, then recompute the whole chain per read. A conditional is a
-    boundary no fusion crosses. Its predicate is dt being finite: with a
-    non-finite dt every quantity of the step is non-finite anyway, and the
-    other branch returns NaN, so the result is the same either way.
-    """
-    return jax.lax.cond(jnp.isfinite(dt), lambda t: t,
-                        lambda t: jax.tree.map(lambda a: jnp.full_like(a, jnp.nan), t), tree)

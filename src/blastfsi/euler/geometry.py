@@ -1,10 +1,9 @@
 """Finite-volume metric of the radial axis (axis 0) in cylindrical (j = 1) and spherical (j = 2) geometry.
 
-Cell i spans r_{i-1/2} = origin_0 + i dx to r_{i+1/2}; face area A = |r|^j and
-cell volume V_i = |r_{i+1/2}^{j+1} - r_{i-1/2}^{j+1}| / (j + 1), per radian^j
+Cell i spans r_{i-1/2} = origin_0 + i dx to r_{i+1/2}; face area A = r^j and
+cell volume V_i = (r_{i+1/2}^{j+1} - r_{i-1/2}^{j+1}) / (j + 1), per radian^j
 (the factors 2 pi and 4 pi cancel in the update; :func:`cell_volumes` restores
-them). The absolute values make ghost cells across r = 0 mirror images of the
-interior. A radial flux divergence is written
+them). A radial flux divergence is written
 
     (1/V_i) (A_{i+1/2} F_{i+1/2} - A_{i-1/2} F_{i-1/2}) = (g+_i F_{i+1/2} - g-_i F_{i-1/2}) / dx,
     g+-_i = A_{i+-1/2} dx / V_i,
@@ -17,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from blastfsi.euler.config import CARTESIAN, Config
+from blastfsi.euler.config import AXIS, CARTESIAN, WALL, Config
 
 
 def _along_axis0(v, ndim, dtype):
@@ -30,23 +29,29 @@ def _faces(cfg: Config, first: int, count: int):
 
 
 def flux_factors(cfg: Config, first: int, count: int, dtype):
-    """(g+, g-) of cells first .. first+count-1 (indices may run into the ghost cells)."""
+    """(g+, g-) of cells first .. first+count-1."""
     j = cfg.geometry
     r = _faces(cfg, first, count)
-    area = np.abs(r) ** j
-    vol = np.abs(np.diff(r ** (j + 1))) / (j + 1)
+    area = r ** j
+    vol = np.diff(r ** (j + 1)) / (j + 1)
     nd = len(cfg.shape)
     return _along_axis0(area[1:] * cfg.dx / vol, nd, dtype), _along_axis0(area[:-1] * cfg.dx / vol, nd, dtype)
 
 
 def face_source_factor(cfg: Config, first: int, count: int, dtype):
-    """j dx / r at faces first .. first+count-1 (face f is the lower face of cell f); 0 at r = 0.
+    """j dx / r at faces first .. first+count-1 (face f is the lower face of cell f); 0 at r = 0 and
+    at a mirror (wall/axis) boundary face.
 
-    Multiplies the quasi-one-dimensional source -(j/r) G of the Lax-Wendroff predictor.
+    Multiplies the quasi-one-dimensional source -(j/r) G of the Lax-Wendroff
+    predictor. At a mirror face the normal velocity vanishes, and so must the
+    predicted normal momentum there (the mirror average gives exactly 0 without
+    the source), so that no mass or energy crosses the wall.
     """
-    r = cfg.origin[0] + cfg.dx * np.arange(first, first + count, dtype=np.float64)
-    safe = np.where(r == 0.0, 1.0, r)
-    return _along_axis0(np.where(r == 0.0, 0.0, cfg.geometry * cfg.dx / safe), len(cfg.shape), dtype)
+    f = np.arange(first, first + count)
+    r = cfg.origin[0] + cfg.dx * f.astype(np.float64)
+    mirror = ((f == 0) & (cfg.bc[0][0] in (WALL, AXIS))) | ((f == cfg.shape[0]) & (cfg.bc[0][1] in (WALL, AXIS)))
+    keep = (r != 0.0) & ~mirror
+    return _along_axis0(np.where(keep, cfg.geometry * cfg.dx / np.where(keep, r, 1.0), 0.0), len(cfg.shape), dtype)
 
 
 def cell_volumes(cfg: Config, dtype):

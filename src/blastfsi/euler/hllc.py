@@ -30,7 +30,7 @@ import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
-from blastfsi.euler.boundaries import fence, pad, shift
+from blastfsi.euler.boundaries import pad, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
 
@@ -50,13 +50,12 @@ def van_leer(d_lo, d_hi, tiny):
     return (d_lo * jnp.abs(d_hi) + jnp.abs(d_lo) * d_hi) / jnp.maximum(jnp.abs(d_lo) + jnp.abs(d_hi), tiny)
 
 
-def hllc_flux(left: FaceState, right: FaceState, lay, axis, keep):
+def hllc_flux(left: FaceState, right: FaceState, lay, axis):
     """HLLC flux rows and the face velocity of the alpha div u term (module docstring).
 
     Side K contributes w_K [U_K v_K + (p_K + j_K rho_K) e_normal + (p_K u_K + j_K (rho_K s* +
     p_K/(S_K - u_K))) e_energy] with v_K = u_K + g_K, j_K = g_K (S_K - u_K),
     g_K = s_K (s* - u_K)/(S_K - s*): Toro's F_K + s_K (U*_K - U_K), row by row.
-    ``keep`` stores the face scalars shared by all rows.
     """
     u_l, u_r = left.u, right.u
     sq_l, sq_r = jnp.sqrt(left.rho), jnp.sqrt(right.rho)
@@ -76,7 +75,7 @@ def hllc_flux(left: FaceState, right: FaceState, lay, axis, keep):
         wv.append(w * (st.u + g))
         x_n = x_n + w * (st.p + j * st.rho)
         x_e = x_e + w * (st.p * st.u + j * (st.rho * s_star + st.p / (s_wave - st.u)))
-    wv_l, wv_r, x_n, x_e = keep((wv[0], wv[1], x_n, x_e))
+    wv_l, wv_r = wv
     nrm = lay.mom + axis
     flux = tuple(wv_l * a + wv_r * b + (x_n if r == nrm else 0.0) + (x_e if r == lay.energy else 0.0)
                  for r, (a, b) in enumerate(zip(left.cons, right.cons)))
@@ -107,7 +106,7 @@ def _reconstructed(w, eos_r, lay):
     return rho_e, c2, ok
 
 
-def axis_flux(z, nw, eos_r, cfg: Config, lay, axis, keep):
+def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
     """HLLC flux rows and face velocity at the faces 0..n of one axis (face f between cells f-1, f).
 
     z: rows [primitive rows (nw), rho e, c^2] with NG ghost cells on that axis.
@@ -120,10 +119,9 @@ def axis_flux(z, nw, eos_r, cfg: Config, lay, axis, keep):
         mid = c - b
         w_left.append(b + 0.5 * van_leer(b - a, mid, tiny))
         w_right.append(c - 0.5 * van_leer(mid, d - c, tiny))
-    w_left, w_right = keep((tuple(w_left), tuple(w_right)))
     e_left, c2_left, ok_left = _reconstructed(w_left, eos_r, lay)
     e_right, c2_right, ok_right = _reconstructed(w_right, eos_r, lay)
-    ok, e_left, c2_left, e_right, c2_right = keep((ok_left & ok_right, e_left, c2_left, e_right, c2_right))
+    ok = ok_left & ok_right
 
     def pick(face, centre):  # first order at a face with a non-physical reconstructed state
         return jnp.where(ok, face, centre)
@@ -131,24 +129,21 @@ def axis_flux(z, nw, eos_r, cfg: Config, lay, axis, keep):
     left = _face_state(tuple(map(pick, w_left, z1[:nw])), pick(e_left, z1[nw]), pick(c2_left, z1[nw + 1]), lay, axis)
     right = _face_state(tuple(map(pick, w_right, z2[:nw])), pick(e_right, z2[nw]), pick(c2_right, z2[nw + 1]), lay,
                         axis)
-    return hllc_flux(left, right, lay, axis, keep)
+    return hllc_flux(left, right, lay, axis)
 
 
-def rhs(rows, dt, eos_r, cfg: Config, lay):
-    """Semi-discrete right-hand side L(U) of a tuple of conservative rows (dt only for :func:`fence`)."""
+def rhs(rows, eos_r, cfg: Config, lay):
+    """Semi-discrete right-hand side L(U) of a tuple of conservative rows."""
     nm, dtype = lay.n, rows[0].dtype
 
-    def keep(tree):
-        return fence(tree, dt)
-
     st = cell_state(rows, eos_r, lay)
-    cells = keep(st.rho_k + st.velocity + (st.p,) + ((rows[lay.alpha],) if nm == 2 else ()) + (st.rho_e, st.c2))
+    cells = st.rho_k + st.velocity + (st.p,) + ((rows[lay.alpha],) if nm == 2 else ()) + (st.rho_e, st.c2)
     nw, p = len(cells) - 2, cells[nm + lay.ndim]
     total = [0.0] * lay.nvar
     for axis in range(lay.ndim):
         n, nrm = cfg.shape[axis], lay.mom + axis
         padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
-        flux, u_face = axis_flux(padded, nw, eos_r, cfg, lay, axis, keep)
+        flux, u_face = axis_flux(padded, nw, eos_r, cfg, lay, axis)
         radial = axis == 0 and cfg.geometry != CARTESIAN
         if radial:
             gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
@@ -174,6 +169,6 @@ def step(U, dt, eos_r, cfg: Config, lay):
 
     def stage(i, rows):
         return tuple(a[i] * x0 + (1.0 - a[i]) * (x + dt * k)
-                     for x0, x, k in zip(rows0, rows, rhs(rows, dt, eos_r, cfg, lay)))
+                     for x0, x, k in zip(rows0, rows, rhs(rows, eos_r, cfg, lay)))
 
     return jnp.stack(jax.lax.fori_loop(0, 2, stage, rows0))

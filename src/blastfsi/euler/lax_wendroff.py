@@ -15,16 +15,23 @@ One directional operator L_a(dt) (:func:`sweep`) is
    at a jump theta = +1 on one side and -1 on the other, so its positive part
    (ERRATA 000-2) would smooth only one side and break the mirror symmetry of
    the scheme; |theta| smooths both and is never anti-diffusive
-   (0 <= k/2 <= 1/8 keeps the explicit smoothing stable).
+   (0 <= k/2 <= 1/8 keeps the explicit smoothing stable). The sound speed in
+   nu is that of the state at the start of the full step (the paper leaves
+   open which c; this saves one EOS evaluation per operator), u_a and rho are
+   the current ones.
 
-2. the two-step (Richtmyer) Lax-Wendroff scheme on U_bar (ERRATA 000-1: Eq. (7)
-   as printed lacks the flux Jacobian; for a linear flux the two agree):
+2. the two-step (Richtmyer) Lax-Wendroff scheme on U_bar, with U_bar's own
+   ghost cells (boundary conditions applied again after the smoothing, so that
+   a mirror wall sees the mirror image of the smoothed state and passes no
+   mass or energy) (ERRATA 000-1: Eq. (7) as printed lacks the flux Jacobian;
+   for a linear flux the two agree):
 
        U_{i+1/2} = (U_i + U_{i+1})/2 - dt/(2 dx) (F_{i+1} - F_i) - dt/2 (j/r_{i+1/2}) G_{i+1/2}
        U_i^new  = U_bar_i - dt/dx (g+_i F(U_{i+1/2}) - g-_i F(U_{i-1/2})) + geometric pressure force
 
    with G the radial flux without the pressure (quasi-1D form, radial axis
-   only) and the pressure force dt/dx (g+ - g-) p_i at the half step,
+   only; zero at a mirror boundary face, see geometry.face_source_factor) and
+   the pressure force dt/dx (g+ - g-) p_i at the half step,
    p_i = (p_{i+1/2} + p_{i-1/2})/2. The products fraction follows
    d alpha/dt + d(alpha u)/dx - alpha du/dx = 0 with the same stencils.
 
@@ -37,11 +44,11 @@ import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
-from blastfsi.euler.boundaries import fence, pad, shift
+from blastfsi.euler.boundaries import pad, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.mixture import cell_state
 
-NG = 3  # ghost cells: viscosity at the cells next to the boundary face needs rho three cells out
+NG = 2  # ghost cells: theta (Eq. 4) of the cell next to a boundary face needs rho two cells out
 
 
 def _fluxes(rows, p, un, lay, nrm):
@@ -49,36 +56,37 @@ def _fluxes(rows, p, un, lay, nrm):
     return tuple(x * un + (p if r == nrm else 0.0) + (p * un if r == lay.energy else 0.0) for r, x in enumerate(rows))
 
 
-def sweep(rows, dt, eos_r, cfg: Config, lay, axis: int):
-    """One directional operator L_axis(dt) on a tuple of conservative rows (module docstring)."""
+def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int):
+    """One directional operator L_axis(dt) on a tuple of conservative rows (module docstring);
+    c: sound speed of the state at the start of the full step."""
     n, lam, nrm = cfg.shape[axis], dt / cfg.dx, lay.mom + axis
     dtype = rows[0].dtype
     radial = axis == 0 and cfg.geometry != CARTESIAN
 
-    def keep(tree):
-        return fence(tree, dt)
-
-    # 000 Eqs. (3)-(5): adaptive viscosity on cells -1..n (padded index 2..n+3).
-    q = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nrm else None) for r, x in enumerate(rows))
-    st = cell_state(q, eos_r, lay)
-    nu = (jnp.abs(st.velocity[axis]) + jnp.sqrt(jnp.maximum(st.c2, 0.0))) * lam
-    jump = jnp.abs(shift(st.rho, axis, 1, n + 5) - shift(st.rho, axis, 0, n + 5))
-    d_lo, d_hi = shift(jump, axis, 0, n + 4), shift(jump, axis, 1, n + 4)
+    # 000 Eqs. (3)-(5): adaptive viscosity on cells 0..n-1 (padded index p = cell + NG).
+    q = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nrm else None) for r, x in enumerate(rows + (c,)))
+    q, c = q[:-1], q[-1]
+    rho = q[0] if lay.n == 1 else q[0] + q[1]
+    nu = (jnp.abs(q[nrm] / rho) + c) * lam
+    jump = jnp.abs(shift(rho, axis, 1, n + 3) - shift(rho, axis, 0, n + 3))
+    d_lo, d_hi = shift(jump, axis, 0, n + 2), shift(jump, axis, 1, n + 2)  # cells -1..n
     theta = jnp.abs(d_hi - d_lo) / jnp.maximum(d_hi + d_lo, jnp.finfo(dtype).tiny)
-    k_cell = shift(nu * (1.0 - nu), axis, 1, n + 4) * theta
-    k_face = keep(0.25 * (shift(k_cell, axis, 0, n + 3) + shift(k_cell, axis, 1, n + 3)))  # 1/2 of the mean
+    k_cell = shift(nu * (1.0 - nu), axis, 1, n + 2) * theta
+    k_face = 0.25 * (shift(k_cell, axis, 0, n + 1) + shift(k_cell, axis, 1, n + 1))  # 1/2 of the mean, faces 0..n
     if radial:
-        gp, gm = geometry.flux_factors(cfg, -1, n + 2, dtype)
+        gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
     ubar = []
     for x in q:
-        d = k_face * (shift(x, axis, 2, n + 3) - shift(x, axis, 1, n + 3))
-        d_hi, d_lo = shift(d, axis, 1, n + 2), shift(d, axis, 0, n + 2)
-        ubar.append(shift(x, axis, 2, n + 2) + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
-    ubar = keep(tuple(ubar))
+        d = k_face * (shift(x, axis, 2, n + 1) - shift(x, axis, 1, n + 1))
+        d_hi, d_lo = shift(d, axis, 1, n), shift(d, axis, 0, n)
+        ubar.append(shift(x, axis, 2, n) + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
+    # the operator acts on U_bar with its own boundary values (one ghost cell each side: cells -1..n)
+    ubar = tuple(pad(x, axis, cfg.bc[axis], 1, -1.0 if r == nrm else None) for r, x in enumerate(ubar))
 
     # Richtmyer predictor at faces -1/2 .. n-1/2.
     sb = cell_state(ubar, eos_r, lay)
-    f, p, un = keep((_fluxes(ubar, sb.p, sb.velocity[axis], lay, nrm), sb.p, sb.velocity[axis]))
+    p, un = sb.p, sb.velocity[axis]
+    f = _fluxes(ubar, p, un, lay, nrm)
     if radial:
         src = 0.25 * lam * geometry.face_source_factor(cfg, 0, n + 1, dtype)
     half = []
@@ -91,13 +99,13 @@ def sweep(rows, dt, eos_r, cfg: Config, lay, axis: int):
             g = fx - p if r == nrm else fx  # radial flux without the pressure
             h = h - src * (shift(g, axis, 0, n + 1) + shift(g, axis, 1, n + 1))
         half.append(h)
-    half = keep(tuple(half))
+    half = tuple(half)
 
     # Corrector on cells 0..n-1.
     sh = cell_state(half, eos_r, lay)
-    fh, ph, uh = keep((_fluxes(half, sh.p, sh.velocity[axis], lay, nrm), sh.p, sh.velocity[axis]))
+    ph, uh = sh.p, sh.velocity[axis]
+    fh = _fluxes(half, ph, uh, lay, nrm)
     if radial:
-        gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
         p_mid = 0.5 * (shift(ph, axis, 0, n) + shift(ph, axis, 1, n))  # pressure force at the half step
     out = []
     for r, (x, fx) in enumerate(zip(ubar, fh)):
@@ -121,6 +129,8 @@ def step(U, dt, eos_r, cfg: Config, lay):
     """
     ndim = len(cfg.shape)
     order = jnp.asarray(tuple(reversed(range(ndim))) + tuple(range(ndim)))
-    branches = [lambda rows, a=a: sweep(rows, 0.5 * dt, eos_r, cfg, lay, a) for a in range(ndim)]
-    rows = jax.lax.fori_loop(0, 2 * ndim, lambda i, rows: jax.lax.switch(order[i], branches, rows), tuple(U))
+    rows = tuple(U)
+    c = jnp.sqrt(jnp.maximum(cell_state(rows, eos_r, lay).c2, 0.0))
+    branches = [lambda rows, a=a: sweep(rows, c, 0.5 * dt, eos_r, cfg, lay, a) for a in range(ndim)]
+    rows = jax.lax.fori_loop(0, 2 * ndim, lambda i, rows: jax.lax.switch(order[i], branches, rows), rows)
     return jnp.stack(rows)

@@ -171,6 +171,8 @@ class Euler:
         for q in ("mass", "energy"):
             first, last = hist[q][0], hist[q][-1]
             out[f"{q}_change_relative"] = float((last - first) / abs(first)) if first != 0 else None
+        # a charge run starts at the remap time: report times from the detonation
+        t0 = float(setup.info.get("remap_time", 0.0))
         gauges = []
         for k, (pos, cell) in enumerate(zip(setup.gauges, setup.gauge_cells)):
             arrival = float(state.arrival[cell])
@@ -179,20 +181,35 @@ class Euler:
                 "position": [float(v) for v in pos],
                 "peak_overpressure": float(state.peak[cell]),
                 "impulse": float(state.impulse[cell]),
-                "arrival_time": arrival if np.isfinite(arrival) else None,
+                "arrival_time": t0 + arrival if np.isfinite(arrival) else None,
                 "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None,
             })
+        if "charge_mass" in setup.info and gauges:
+            from blastfsi.detonation import kb_compare
+
+            info = setup.info
+            r = kb_compare.distances(setup.gauges, info["charge_center"])
+            gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"])
+            out.update(charge_mass=info["charge_mass"], remap_time=t0)
         out["gauges"] = gauges
         return out
 
 
-    def plots(self, folder, sc: EulerScenario, histories: list[dict], members: list[dict], finals: list) -> None:
+    def plots(self, folder, sc: EulerScenario, setups: list, histories: list[dict], members: list[dict],
+              finals: list) -> None:
         """Gauge overpressure histories and the final pressure field (slice z = middle in 3D), member 0."""
         from blastfsi.plotting.fields import plot_pressure_field
         from blastfsi.plotting.histories import gauge_histories
 
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+            if sc.initial.kind == "charge":
+                from blastfsi.plotting.kb import kb_gauge_histories
+
+                info = setups[0].info
+                hist = dict(histories[0], time=histories[0]["time"] + info["remap_time"])
+                kb_gauge_histories(folder / "gauges_kb.png", hist, sc.output.gauges, info["charge_mass"],
+                                   info["kb_burst"], centre=info["charge_center"])
         grid = finals[0]
         labels = ("r [m]", "z [m]") if sc.domain.geometry != "cartesian" else ("x [m]", "y [m]", "z [m]")
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],

@@ -61,7 +61,8 @@ def primitives(U, params: Params, cfg: Config) -> dict:
 def _bad_and_speed(U, params, cfg):
     lay, eos_r = _setup(U, params, cfg)
     st = cell_state(U, eos_r, lay)
-    bad = ~((st.rho > 0.0) & (st.p > 0.0) & (st.c2 > 0.0))
+    bad = ~((st.rho > 0.0) & (st.p > 0.0) & (st.c2 > 0.0) & jnp.isfinite(st.rho) & jnp.isfinite(st.p)
+            & jnp.isfinite(st.c2))
     c = jnp.sqrt(jnp.maximum(st.c2, 0.0))
     speeds = [jnp.abs(v) + c for v in st.velocity]
     if cfg.scheme == LAX_WENDROFF:
@@ -74,7 +75,7 @@ def _bad_and_speed(U, params, cfg):
 
 
 def stable_dt(U, params: Params, cfg: Config):
-    """CFL step; NaN exactly when some cell is non-physical (NaN, rho <= 0, p <= 0 or c^2 <= 0).
+    """CFL step; NaN exactly when some cell is non-physical (NaN or inf, rho <= 0, p <= 0 or c^2 <= 0).
 
     Lax-Wendroff (split): dt = cfl dx / max over cells and axes of (|u_d| + c); each directional
     operator then runs at Courant number <= cfl/2 (dt/2 each).

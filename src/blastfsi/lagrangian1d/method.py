@@ -14,7 +14,7 @@ from blastfsi.lagrangian1d.scenario import Scenario
 from blastfsi.method import Polyline, register
 from blastfsi.problems import detonation, plate1d
 
-CJ_WINDOW = (0.5, 0.9)  # charge-radius fractions over which the burn front's peak pressure is averaged
+CJ_WINDOW = (0.5, 0.9)  # charge-radius fractions over which the burn front's pressure is averaged
 
 
 def _geometry(setup) -> int:
@@ -123,7 +123,8 @@ class Lagrangian1D:
             out["explosion_time"] = info["explosion_time"]
         return out
 
-    def plots(self, folder: Path, sc: Scenario, histories: list[dict], members: list[dict], finals: list) -> None:
+    def plots(self, folder: Path, sc: Scenario, setups: list, histories: list[dict], members: list[dict],
+              finals: list) -> None:
         from blastfsi.plotting import gauge_histories, plate_histories
 
         if sc.charge is not None:
@@ -141,12 +142,13 @@ class Lagrangian1D:
 
 
 def burn_front_pressure(setup, state: scheme.State) -> float:
-    """Mean over the explosive zones with centres in CJ_WINDOW x R of each zone's peak
-    pressure F p_E (000 Eq. 52): the pressure the programmed burn reaches at its front."""
+    """Mean over the explosive zones with centres in CJ_WINDOW x R of the pressure F p_E (000 Eq. 52)
+    each zone has when its burn completes (F reaches 1): the end of the programmed burn's reaction
+    zone, which a steady wave at D ~ D_CJ leaves at the CJ point."""
     x0 = setup.x
     centre = 0.5 * (x0[1:] + x0[:-1])[: setup.explosive_zones] / setup.info["charge_radius"]
     sel = (centre >= CJ_WINDOW[0]) & (centre <= CJ_WINDOW[1])
-    return float(np.mean(np.asarray(state.zone_peak)[: setup.explosive_zones][sel]))
+    return float(np.mean(np.asarray(state.zone_burnt)[: setup.explosive_zones][sel]))
 
 
 def charge_summary(sc: Scenario, setup, hist: dict, state: scheme.State) -> dict:

@@ -116,8 +116,10 @@ class Domain(Strict):
 class Grid(Strict):
     cells: int = Field(ge=10, le=10_000_000, description=(
         "number of Lagrangian zones; with a [charge]: zones across the charge radius (uniform)"))
-    growth: float = Field(1.02, ge=1.0, le=1.2, description=(
+    growth: float = Field(1.05, ge=1.0, le=1.2, description=(
         "[charge] width ratio of neighbouring air zones, growing away from the charge"))
+    first_ratio: float = Field(100.0, ge=0.1, le=1e4, description=(
+        "[charge] width of the first air zone / charge zone width"))
     max_ratio: float = Field(100.0, ge=1.0, le=1e5, description=(
         "[charge] largest air zone width / charge zone width (the air zones stop growing there)"))
 

@@ -145,7 +145,7 @@ class State(NamedTuple):
     gauge_end: jnp.ndarray  # (G,) end of the positive phase [s]
     gauge_positive_impulse: jnp.ndarray  # (G,) positive-phase impulse [Pa s]
     gauge_last: jnp.ndarray  # (G,) overpressure at the previous step [Pa]
-    zone_peak: jnp.ndarray  # (N,) peak pressure F p_E of each zone (the burn front's pressure) [Pa]
+    zone_burnt: jnp.ndarray  # (N,) pressure F p_E of each zone at the step its burn completes (F reaches 1) [Pa]
     # clock fields of blastfsi.timeloop
     t: jnp.ndarray
     dt_prev: jnp.ndarray  # dt_j, the step that led to t_j (0 at start)
@@ -298,7 +298,8 @@ def vnr_step(s: State, dt, node_mass, num: Numerics, bc: Boundaries, static: Sta
         face_impulse=s.face_impulse + dt * face_over,
         peak_face_overpressure=jnp.maximum(s.peak_face_overpressure, face_over),
         boundary_work=s.boundary_work + work,
-        zone_peak=jnp.maximum(s.zone_peak, p_eos),
+        zone_burnt=jnp.where((F < 1.0) & (F_new >= 1.0), F_new * jwl.pressure(rho_new, e, zones.eos()),
+                             s.zone_burnt),
     )
 
 
@@ -350,7 +351,7 @@ def initial_state(x, v, e, zone_mass, gamma, n_samples: int, n_gauges: int = 0, 
         zone_mass=zone_mass, energy0=zero, face_impulse=zero,
         peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
         gauge_impulse=g, gauge_peak=g - jnp.inf, gauge_arrival=g + jnp.inf, gauge_end=g + jnp.inf,
-        gauge_positive_impulse=g, gauge_last=g, zone_peak=jnp.zeros_like(e),
+        gauge_positive_impulse=g, gauge_last=g, zone_burnt=jnp.zeros_like(e),
         **timeloop.clock(n_samples, N_HIST + n_gauges, x.dtype),
     )
     right = Boundaries(zero, zero, jnp.asarray(right_mass, x.dtype), zero)

@@ -22,7 +22,8 @@ class MaterialError(ValueError):
 def lookup(name: str, overrides: dict | None = None, *, field: str = "material"):
     """The constant set ``name`` with ``overrides`` applied (dataclasses.replace).
 
-    ``field`` is the scenario key being resolved, quoted in error messages.
+    ``field`` is the scenario key naming the material, quoted when the name is unknown;
+    an unknown or non-numeric override is reported as ``materials.<name>.<key>``.
     """
     if name not in LIBRARY:
         raise MaterialError(f"{field}: unknown material {name!r}; available: {', '.join(sorted(LIBRARY))}")
@@ -31,8 +32,9 @@ def lookup(name: str, overrides: dict | None = None, *, field: str = "material")
     names = {f.name for f in dataclasses.fields(entry)} - {"sources", "description"}
     unknown = sorted(set(overrides) - names)
     if unknown:
-        raise MaterialError(f"{field}: material {name!r} has no key(s) {unknown}; its keys: {sorted(names)}")
+        raise MaterialError(f"materials.{name}: material {name!r} has no key(s) {unknown}; "
+                            f"its keys: {sorted(names)}")
     for key, value in overrides.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise MaterialError(f"{field}.{key}: expected a number, got {value!r}")
+            raise MaterialError(f"materials.{name}.{key}: expected a number, got {value!r}")
     return dataclasses.replace(entry, **{k: float(v) for k, v in overrides.items()})

@@ -109,8 +109,10 @@ def new_particles(x, volume, density, *, v=None, material=0, half_size=None, str
 
     ``volume`` (n,) and ``density`` (scalar or (n,)) give the mass; ``v`` (n, 3)
     the velocity (default: ``prescribed`` or zero); ``prescribed`` (n, 3) or
-    None: the prescribed velocity of an impactor (those particles move with it); ``surface_load`` (n, 3): t/h of
-    000 Eq. (20), see :func:`surface_load`; ``stress`` (n, 6) Voigt.
+    None: the prescribed velocity of an impactor, all particles of the batch
+    move with it (build bodies as separate batches, join with :func:`concatenate`);
+    ``surface_load`` (n, 3): t/h of 000 Eq. (20), see :func:`surface_load`;
+    ``stress`` (n, 6) Voigt.
     """
     x = np.atleast_2d(np.asarray(x, float))
     n, d = x.shape
@@ -124,21 +126,26 @@ def new_particles(x, volume, density, *, v=None, material=0, half_size=None, str
     if not np.all(density > 0.0):
         raise ParticleError("density: expected values > 0")
 
-    hist = np.zeros((n, history_size)) if history is None else np.broadcast_to(np.asarray(history, float),
-                                                                              (n, history_size))
+    zero = np.zeros(n)
     point = PointState(
-        stress=jnp.asarray(np.zeros((n, 6)) if stress is None else np.broadcast_to(stress, (n, 6)), dtype),
-        density=jnp.asarray(density, dtype),
-        energy=jnp.asarray(np.zeros(n) if energy is None else np.broadcast_to(energy, (n,)), dtype),
-        plastic_strain=jnp.zeros(n, dtype), damage=jnp.zeros(n, dtype), history=jnp.asarray(hist, dtype))
-    return Particles(
-        x=jnp.asarray(x, dtype), v=jnp.asarray(_pad3(prescribed if v is None else v, n), dtype), mass=jnp.asarray(volume * density, dtype),
-        volume0=jnp.asarray(volume, dtype), half_size=jnp.asarray(_pad3(half_size, n), dtype),
-        material=jnp.asarray(np.broadcast_to(material, (n,)), jnp.int32), active=jnp.ones(n, bool), point=point,
-        q=jnp.zeros(n, dtype), vol_rate=jnp.zeros(n, dtype), wave_speed=jnp.zeros(n, dtype),
-        plastic_work=jnp.zeros(n, dtype), prescribed=jnp.full(n, prescribed is not None),
-        prescribed_velocity=jnp.asarray(_pad3(prescribed, n), dtype),
-        surface_load=jnp.asarray(_pad3(surface_load, n), dtype))
+        stress=np.zeros((n, 6)) if stress is None else np.broadcast_to(np.asarray(stress, float), (n, 6)),
+        density=density, energy=zero if energy is None else np.broadcast_to(np.asarray(energy, float), (n,)),
+        plastic_strain=zero, damage=zero,
+        history=np.zeros((n, history_size)) if history is None else np.broadcast_to(np.asarray(history, float),
+                                                                                    (n, history_size)))
+    batch = Particles(
+        x=x, v=_pad3(prescribed if v is None else v, n), mass=volume * density, volume0=volume,
+        half_size=_pad3(half_size, n), material=np.broadcast_to(np.asarray(material, np.int32), (n,)),
+        active=np.ones(n, bool), point=point, q=zero, vol_rate=zero, wave_speed=zero, plastic_work=zero,
+        prescribed=np.full(n, prescribed is not None), prescribed_velocity=_pad3(prescribed, n),
+        surface_load=_pad3(surface_load, n))
+    return jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype if np.issubdtype(a.dtype, np.floating) else None),
+                                  batch)
+
+
+def concatenate(*batches: Particles) -> Particles:
+    """One particle set from several (e.g. bodies built separately), host side."""
+    return jax.tree_util.tree_map(lambda *a: jnp.asarray(np.concatenate([np.asarray(x) for x in a])), *batches)
 
 
 def surface_load(traction, layer_thickness):
@@ -157,8 +164,7 @@ def lattice(grid, lower, upper, per_cell: int = 2):
     at the centres of the sub-cells counted from ``lower``. Returns positions
     (n, 3), volumes (n,) (axisymmetric: 2 pi r s^2) and GIMP half-sizes (n, 3) = s/2.
     """
-    if isinstance(per_cell, bool) or not isinstance(per_cell, (int, np.integer)) or per_cell < 1:
-        raise ParticleError(f"per_cell: expected an integer >= 1, got {per_cell!r}")
+    _check_count("per_cell", per_cell, 1)
     lower, upper = np.atleast_1d(np.asarray(lower, float)), np.atleast_1d(np.asarray(upper, float))
     if lower.shape != (grid.dim,) or upper.shape != (grid.dim,):
         raise ParticleError(f"lower/upper: expected {grid.dim} coordinates each")
@@ -206,9 +212,12 @@ def add_particles(pool: Particles, batch: Particles):
     return pool, required
 
 
+_add_particles_compiled = jax.jit(add_particles)
+
+
 def insert(pool: Particles, batch: Particles) -> Particles:
     """Host-side :func:`add_particles` that raises :class:`CapacityError` on overflow."""
-    new_pool, required = jax.jit(add_particles)(pool, batch)
+    new_pool, required = _add_particles_compiled(pool, batch)
     check_capacity(required, pool.mass.shape[0])
     return new_pool
 

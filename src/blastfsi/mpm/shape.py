@@ -63,32 +63,47 @@ GIMP = Shape("gimp", 3, _gimp_basis)
 SHAPES = {s.name: s for s in (LINEAR, GIMP)}
 
 
-def stencil(x, half_size, grid, shape: Shape):
-    """Node indices, weights and weight gradients of every particle.
+def factors(x, half_size, grid, shape: Shape):
+    """Per-direction factors of the stencil: for each grid direction j a tuple
+    (node index times stride (k, n) int32, N (k, n), dN/dx (k, n)), zero outside the grid.
 
-    x, half_size: (n, 3) positions and GIMP half-sizes [m] (half_size unused by
-    LINEAR). Returns ``idx`` (S, n) flat node indices, ``w`` (S, n) = N_Ip and
-    ``grad``, a tuple of ``dim`` arrays (S, n) = dN_Ip/dx_j, S = nodes_per_dim ** dim.
-    The stencil axis leads (one contiguous row per stencil node): small
-    trailing axes vectorise badly on CPU.
+    x, half_size: (n, 3) positions and GIMP half-sizes [m] (half_size unused by LINEAR).
     """
-    d, h, k, n = grid.dim, grid.cell_size, shape.nodes_per_dim, x.shape[0]
-    idx, weights, slopes = 0, [], []
-    for j in range(d):
+    h, k = grid.cell_size, shape.nodes_per_dim
+    out = []
+    for j in range(grid.dim):
         xi = (x[:, j] - grid.origin[j]) / h
         first, N, dN = shape.basis(xi, half_size[:, j] / h, grid.cells[j])
-        node = first[None, :] + jnp.arange(k, dtype=first.dtype)[:, None]  # (k, n)
+        node = first[None, :] + jnp.arange(k, dtype=first.dtype)[:, None]
         valid = (node >= 0) & (node <= grid.cells[j])
-        block = [1] * d + [n]
-        block[j] = k  # direction j varies along axis j of the (k,) * d stencil block
-        idx = idx + (grid.strides[j] * jnp.clip(node, 0, grid.cells[j])).reshape(block)
-        weights.append(jnp.where(valid, jnp.stack(N), 0.0).reshape(block))
-        slopes.append(jnp.where(valid, jnp.stack(dN) / h, 0.0).reshape(block))
+        out.append((grid.strides[j] * jnp.clip(node, 0, grid.cells[j]),
+                    jnp.where(valid, jnp.stack(N), 0.0), jnp.where(valid, jnp.stack(dN) / h, 0.0)))
+    return tuple(out)
 
-    def flat(a):  # (k,) * d + (n,) block -> (S, n), stencil nodes in C order
+
+def expand(per_dim):
+    """Tensor-product stencil from :func:`factors`: ``idx`` (S, n) flat node indices,
+    ``w`` (S, n) = N_Ip and ``grad``, a tuple of ``dim`` arrays (S, n) = dN_Ip/dx_j,
+    S = k ** dim, stencil nodes in C order. The stencil axis leads (one contiguous
+    row per node): small trailing axes vectorise badly on CPU."""
+    d = len(per_dim)
+    k, n = per_dim[0][1].shape
+
+    def block(a, j):  # (k, n) of direction j -> axis j of a (k,) * d + (n,) block
+        shape = [1] * d + [n]
+        shape[j] = k
+        return a.reshape(shape)
+
+    def flat(a):
         return jnp.broadcast_to(a, (k,) * d + (n,)).reshape(-1, n)
 
-    w = functools.reduce(operator.mul, weights)
-    grad = tuple(flat(functools.reduce(operator.mul, [slopes[i] if i == j else weights[i] for i in range(d)]))
-                 for j in range(d))
+    idx = functools.reduce(operator.add, [block(f[0], j) for j, f in enumerate(per_dim)])
+    w = functools.reduce(operator.mul, [block(f[1], j) for j, f in enumerate(per_dim)])
+    grad = tuple(flat(functools.reduce(operator.mul, [block(f[2] if i == j else f[1], i)
+                                                      for i, f in enumerate(per_dim)])) for j in range(d))
     return flat(idx), flat(w), grad
+
+
+def stencil(x, half_size, grid, shape: Shape):
+    """Node indices, weights and weight gradients of every particle, see :func:`expand`."""
+    return expand(factors(x, half_size, grid, shape))

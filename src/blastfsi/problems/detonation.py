@@ -3,7 +3,7 @@ r = 0 in air, lit at the centre and burnt by the programmed burn of 000
 Eqs. (52)-(53), on the ``lagrangian1d`` method (planar, cylindrical or spherical).
 
 Zoning: ``grid.cells`` equal zones across the charge radius R (h = R / cells,
-the h of Eq. 53); the air zones start at width h and grow by ``grid.growth``
+the h of Eq. 53); the air zones start at width ``grid.first_ratio`` h (at most R/4) and grow by ``grid.growth``
 per zone up to ``grid.max_ratio`` h, to the outer radius ``domain.length``
 (the last zone is stretched to end there exactly). Refining ``grid.cells``
 refines the whole grid in proportion.
@@ -81,11 +81,13 @@ def charge_mass(radius: float, density: float, j: int) -> float:
     return MEASURE[j] * density * radius ** (j + 1) / (j + 1)
 
 
-def graded_nodes(radius: float, cells: int, length: float, growth: float, max_ratio: float) -> np.ndarray:
-    """Node radii: ``cells`` equal zones on [0, radius], then air zones from width h growing by
-    ``growth`` up to ``max_ratio`` h until ``length`` (last zone merged so that it ends at length)."""
+def graded_nodes(radius: float, cells: int, length: float, growth: float, max_ratio: float,
+                 first_ratio: float) -> np.ndarray:
+    """Node radii: ``cells`` equal zones on [0, radius], then air zones from width ``first_ratio`` h
+    (at most radius / 4: a wider first air zone is crushed by the products) growing by ``growth``
+    up to ``max_ratio`` h until ``length`` (last zone merged so that it ends at length)."""
     h = radius / cells
-    widths, total, w = [], radius, h
+    widths, total, w = [], radius, min(first_ratio * h, 0.25 * radius)
     while total < length:
         widths.append(w)
         total += w
@@ -120,7 +122,8 @@ def build(sc: Scenario) -> Setup:
     else:
         air = GASES["air"]
         gamma, rho_a, p_a = air.gamma, air.density, air.pressure
-    x = graded_nodes(radius, sc.grid.cells, sc.domain.length, sc.grid.growth, sc.grid.max_ratio)
+    x = graded_nodes(radius, sc.grid.cells, sc.domain.length, sc.grid.growth, sc.grid.max_ratio,
+                     sc.grid.first_ratio)
     n, nc = x.size - 1, sc.grid.cells
     hx_zone = np.arange(n) < nc
     centre = 0.5 * (x[1:] + x[:-1])

@@ -127,6 +127,15 @@ def build(sc: EulerScenario) -> Setup:
     g = grid_geometry(sc)
     bc = boundary_codes(sc)
     init = sc.initial
+    if init.kind == "charge":
+        from blastfsi.detonation.charge import charge_initial
+
+        c = charge_initial(sc, g)
+        gauges, gauge_cells = _gauges(sc, g)
+        info = {"materials": list(c.materials), "dx": g.dx, "shape": list(g.shape), "geometry": g.geometry,
+                "cfl": sc.numerics.cfl, "arrival_fraction": sc.output.arrival_fraction, **c.info}
+        return Setup(g, c.materials, c.eos, bc, c.rho_k, c.alpha, c.velocity, c.pressure, c.reference_pressure,
+                     gauges, gauge_cells, info)
     ndim = g.ndim
     mesh = g.mesh()
     if init.kind == "riemann":
@@ -217,12 +226,13 @@ def _point_energy_pressure(sc, g: GridGeometry, centre, material) -> np.ndarray:
 
 
 def _domain_share(sc, g: GridGeometry, centre) -> float:
-    """Fraction of a blast centred at ``centre`` that the domain simulates: 1/2 per Cartesian
-    symmetry plane or wall through the centre (the rest is its mirror image)."""
+    """Fraction of a blast centred at ``centre`` that the domain simulates: 1/2 per
+    symmetry plane or wall through the centre (the rest is its mirror image); the
+    radial axis of a cylindrical/spherical/axisymmetric grid needs no such factor."""
     share = 1.0
-    if g.geometry != "cartesian":
-        return share
     for k, ax in enumerate(AXES[: g.ndim]):
+        if k == 0 and g.geometry != "cartesian":
+            continue  # the radius: rings and shells already hold the whole blast
         lo_kind, hi_kind = getattr(sc.boundaries, ax)
         if abs(centre[k] - sc.domain.lower[k]) < 1e-9 * g.dx and lo_kind in ("wall", "symmetry"):
             share *= 0.5

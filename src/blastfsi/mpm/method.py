@@ -1,0 +1,282 @@
+"""The ``mpm`` method behind the driver's face (:class:`blastfsi.method.Method`):
+particles and grid from :mod:`blastfsi.problems.mpm`, the MUSL step of
+:mod:`blastfsi.mpm.musl`, one ``timeloop.run_until``.
+
+Snapshot (:class:`blastfsi.method.Particles`, active particles): ``density``,
+``pressure`` (-tr(sigma)/3, without the bulk viscosity), ``viscous_pressure``
+(q), ``velocity`` (n, ndim; r-z: v_r, v_z), ``stress`` the full Cauchy tensor
+(n, 3, 3) (tension positive; 2D plane strain keeps sigma_zz, r-z keeps the hoop
+stress sigma_thth as the zz entry), ``plastic_strain``, ``damage`` (1: failed),
+``internal_energy`` (J/kg), ``material`` (index into summary ``materials``),
+``body`` (index of the body, the impactor last) and, with a Johnson-Cook
+material, ``temperature`` (NaN for the other materials).
+
+Histories: kinetic, internal (stress and q work, incl. plastic), plastic work
+and external work, the energy balance kinetic + internal - initial - external
+work, mass and momentum; per tracer its displacement; per gauge (a point fixed
+in space) the pressure, density and velocity of the active particle nearest to
+it (NaN when none lies within one cell). Energies per unit area in 1D, per unit
+length in 2D plane strain, whole rings in r-z.
+
+Failure: a particle whose damage reaches 1 keeps its mass and compressive
+response but no tension or deviatoric stress (the models'); the elastic energy
+it held is released as kinetic energy of the neighbours or stays as internal
+energy, so the budget stays closed (no erosion, nothing removed).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from blastfsi import mpm, timeloop
+from blastfsi.method import Particles, register
+from blastfsi.mpm.scenario import AXES, MPMScenario
+from blastfsi.problems import mpm as problem
+
+VOIGT_TO_TENSOR = np.array([[0, 5, 4], [5, 1, 3], [4, 3, 2]])  # Voigt [xx, yy, zz, yz, xz, xy] -> 3 x 3
+
+
+class State(NamedTuple):
+    mpm: mpm.State
+    t: jnp.ndarray
+    dt_prev: jnp.ndarray
+    dt0: jnp.ndarray
+    step: jnp.ndarray
+    fault: jnp.ndarray
+    hist: jnp.ndarray
+    hist_next: jnp.ndarray
+
+
+class Params(NamedTuple):
+    mpm: mpm.Params
+    tracer_x0: jnp.ndarray  # (T, 3) initial positions of the tracer particles
+    gauges: jnp.ndarray  # (G, 3) gauge points
+
+
+class Static(NamedTuple):
+    config: mpm.Config
+    tracers: tuple  # particle index of each tracer
+
+
+def _cast(tree, dtype):
+    return jax.tree_util.tree_map(
+        lambda a: jnp.asarray(a, dtype) if jnp.issubdtype(jnp.asarray(a).dtype, jnp.floating) else jnp.asarray(a),
+        tree)
+
+
+def _energy_unit(setup: problem.Setup, unit: str) -> str:
+    if setup.grid.axisymmetric or setup.ndim == 3:
+        return unit
+    return f"{unit}/m" if setup.ndim == 2 else f"{unit}/m^2"
+
+
+def _pad3(points: np.ndarray) -> np.ndarray:
+    """(n, 3) from (n, d) points, zero-padded."""
+    return np.pad(points, ((0, 0), (0, 3 - points.shape[1])))
+
+
+class MPM:
+    name = "mpm"
+    scenario_model = MPMScenario
+
+    def build(self, sc: MPMScenario) -> problem.Setup:
+        return problem.build(sc)
+
+    def static(self, setup: problem.Setup, sc: MPMScenario) -> Static:
+        return Static(mpm.make_config(setup.grid, setup.models, shape=sc.numerics.shape,
+                                      prescribed=setup.prescribed), setup.tracers)
+
+    def params(self, setup: problem.Setup, dtype) -> Params:
+        sc = setup.info["numerics"]
+        prm = mpm.make_params(setup.model_params, cfl=sc["cfl"], q_quadratic=sc["q_quadratic"],
+                              q_linear=sc["q_linear"], gravity=tuple(setup.info["gravity"]), dtype=dtype)
+        x0 = np.asarray(setup.particles.x)[list(setup.tracers)].reshape(-1, 3)
+        return Params(_cast(prm, dtype), jnp.asarray(x0, dtype), jnp.asarray(_pad3(setup.gauges), dtype))
+
+    def initial_state(self, setup: problem.Setup, sc: MPMScenario, n_samples: int, dtype) -> State:
+        prm = self.params(setup, dtype)
+        s = mpm.initialize(_cast(setup.particles, dtype), prm.mpm, self.static(setup, sc).config)
+        n_cols = len(self.history_columns(setup, sc))
+        return State(s, **timeloop.clock(n_samples, n_cols, dtype))
+
+    def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
+        cfg = static.config
+        d = cfg.grid.dim
+        tracers = jnp.asarray(static.tracers, jnp.int32)
+        h = cfg.grid.cell_size
+
+        def stable_dt(s):
+            return mpm.stable_dt(s.mpm, params.mpm, cfg)
+
+        def step(s, dt):
+            return s._replace(mpm=mpm.step(s.mpm, dt, params.mpm, cfg))
+
+        def history_row(s):
+            P = s.mpm.particles
+            tot = mpm.totals(P)
+            e = mpm.energies(s.mpm)
+            row = [s.t, tot.kinetic, tot.internal, tot.plastic, e["external_work"], tot.mass, *tot.momentum[:d]]
+            row += list((P.x[tracers, :d] - params.tracer_x0[:, :d]).reshape(-1))
+            if params.gauges.shape[0]:
+                dist = jnp.linalg.norm(P.x[None, :, :d] - params.gauges[:, None, :d], axis=2)
+                dist = jnp.where(P.active[None, :], dist, jnp.inf)
+                near = jnp.argmin(dist, axis=1)
+                found = jnp.min(dist, axis=1) <= h
+                pressure = -(P.point.stress[near, 0] + P.point.stress[near, 1] + P.point.stress[near, 2]) / 3.0
+                cols = [pressure, P.point.density[near]] + [P.v[near, i] for i in range(d)]
+                row += list(jnp.where(found[:, None], jnp.stack(cols, axis=1), jnp.nan).reshape(-1))
+            return jnp.stack([jnp.asarray(r, s.hist.dtype) for r in row])
+
+        return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
+                                  stable_dt=stable_dt, step=step, history_row=history_row)
+
+    def history_columns(self, setup: problem.Setup, sc: MPMScenario) -> tuple:
+        d = setup.ndim
+        axes = ("r", "z") if setup.grid.axisymmetric else AXES[:d]
+        J, kg = _energy_unit(setup, "J"), _energy_unit(setup, "kg")
+        cols = [("time", "s"), ("kinetic_energy", J), ("internal_energy", J), ("plastic_work", J),
+                ("external_work", J), ("mass", kg)]
+        cols += [(f"momentum_{a}", _energy_unit(setup, "kg*m/s")) for a in axes]
+        for k in range(len(setup.tracers)):
+            cols += [(f"tracer{k}_displacement_{a}", "m") for a in axes]
+        for k in range(len(setup.gauges)):
+            cols += [(f"gauge{k}_pressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
+            cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in axes]
+        return tuple(cols)
+
+    def snapshot(self, state: State, setup: problem.Setup) -> Particles:
+        P = state.mpm.particles
+        on = np.asarray(P.active)
+        d = setup.ndim
+        ps = P.point
+        stress = np.asarray(ps.stress)[on]
+        fields = {"density": np.asarray(ps.density)[on],
+                  "pressure": -stress[:, :3].sum(axis=1) / 3.0,
+                  "viscous_pressure": np.asarray(P.q)[on],
+                  "velocity": np.asarray(P.v)[on, :d],
+                  "stress": stress[:, VOIGT_TO_TENSOR],
+                  "plastic_strain": np.asarray(ps.plastic_strain)[on],
+                  "damage": np.asarray(ps.damage)[on],
+                  "internal_energy": np.asarray(ps.energy)[on],
+                  "material": np.asarray(P.material)[on],
+                  "body": np.pad(setup.body, (0, on.size - setup.body.size), constant_values=-1)[on]}
+        jc = [k for k, m in enumerate(setup.models) if m.name == "johnson-cook"]
+        if jc:
+            material = fields["material"]
+            rise = np.asarray(ps.history)[on, 0]
+            room = np.array([getattr(setup.model_params[k], "room_temperature", np.nan) if k in jc else np.nan
+                             for k in range(len(setup.models))])
+            fields["temperature"] = np.where(np.isin(material, jc), room[material] + rise, np.nan)
+        return Particles(positions=np.asarray(P.x)[on, :d], point_fields=fields)
+
+    def locate_fault(self, state: State, setup: problem.Setup) -> str:
+        P = state.mpm.particles
+        cfg = mpm.make_config(setup.grid, setup.models)
+        k = int(mpm.first_fault(jax.tree_util.tree_map(jnp.asarray, state.mpm), cfg))
+        if k < 0:  # a collapsed step: name the particle with the fastest signal
+            speed = np.asarray(P.wave_speed) + np.linalg.norm(np.asarray(P.v), axis=1)
+            k = int(np.argmax(np.where(np.asarray(P.active), speed, -np.inf)))
+            what = f"fastest signal {speed[k]:.4g} m/s"
+        else:
+            what = (f"density {float(P.point.density[k]):.4g} kg/m^3, velocity "
+                    f"{np.asarray(P.v[k, :setup.ndim]).tolist()} m/s (non-finite, non-positive density or "
+                    "outside the grid)")
+        axes = ("r", "z") if setup.grid.axisymmetric else AXES
+        where = ", ".join(f"{a} = {float(c):.6g} m" for a, c in zip(axes, np.asarray(P.x[k, :setup.ndim])))
+        body = int(setup.body[k]) if k < setup.body.size else -1
+        return f"particle {k} (body {body}, {setup.materials[int(P.material[k])]}) at {where} ({what})"
+
+    def summary(self, sc: MPMScenario, setup: problem.Setup, hist: dict, state: State) -> dict:
+        P = state.mpm.particles
+        on = np.asarray(P.active)
+        d = setup.ndim
+        kinetic, internal = hist["kinetic_energy"], hist["internal_energy"]
+        balance = kinetic + internal - (kinetic[0] + internal[0]) - hist["external_work"]
+        scale = max(float(np.max(kinetic + internal)), float(np.max(np.abs(hist["external_work"]))), 1e-300)
+        axes = ("r", "z") if setup.grid.axisymmetric else AXES[:d]
+        out = {"particles": int(on.sum()), "capacity": int(on.size), "shape": sc.numerics.shape,
+               "cell_size": setup.grid.cell_size, "grid_cells": list(setup.grid.cells),
+               "materials": list(setup.materials), "bodies": setup.info["bodies"],
+               "mass": float(hist["mass"][-1]), "mass_change_relative": float(hist["mass"][-1] / hist["mass"][0] - 1.0),
+               "kinetic_energy": float(kinetic[-1]), "internal_energy": float(internal[-1]),
+               "plastic_work": float(hist["plastic_work"][-1]), "external_work": float(hist["external_work"][-1]),
+               # a prescribed (impactor) body does work that external_work does not count
+               "energy_balance_relative": None if setup.prescribed else float(balance[-1] / scale),
+               "momentum": [float(hist[f"momentum_{a}"][-1]) for a in axes],
+               "max_plastic_strain": float(np.max(np.asarray(P.point.plastic_strain)[on])),
+               "max_damage": float(np.max(np.asarray(P.point.damage)[on])),
+               "failed_particles": int(np.sum(np.asarray(P.point.damage)[on] >= 1.0))}
+        if setup.tracers:
+            out["tracer_displacement"] = [[float(hist[f"tracer{k}_displacement_{a}"][-1]) for a in axes]
+                                          for k in range(len(setup.tracers))]
+        if "period_theory" in setup.info:
+            out["period_theory"] = setup.info["period_theory"]
+            out["period"] = (zero_crossing_period(hist["time"], hist[f"tracer0_displacement_{axes[0]}"])
+                             if setup.tracers else None)
+        if sc.impactor is not None:
+            out.update(impactor_shape(np.asarray(P.x)[:, :d], setup, len(sc.bodies)))
+        return out
+
+    def plots(self, folder: Path, sc: MPMScenario, setups: list, histories: list[dict], members: list[dict],
+              finals: list) -> None:
+        """Energy histories of every member and the final particles of member 0 coloured by pressure."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        folder.mkdir(parents=True, exist_ok=True)
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for k, h in enumerate(histories):
+            for q in ("kinetic_energy", "internal_energy", "plastic_work"):
+                ax.plot(h["time"], h[q], label=f"{q} (member {k})" if len(histories) > 1 else q)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("energy")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(folder / "energies.png", dpi=120)
+        plt.close(fig)
+        snap = finals[0]
+        fig, ax = plt.subplots(figsize=(6, 4))
+        pos = snap.positions
+        y = pos[:, 1] if pos.shape[1] > 1 else np.zeros(len(pos))
+        art = ax.scatter(pos[:, 0], y, c=snap.point_fields["pressure"], s=2, cmap="viridis")
+        fig.colorbar(art, ax=ax, label="pressure [Pa]")
+        ax.set_aspect("equal" if pos.shape[1] > 1 else "auto")
+        ax.set_xlabel("r [m]" if sc.grid.axisymmetric else "x [m]")
+        ax.set_title(f"{sc.name}: t = {sc.time.end:g} s")
+        fig.tight_layout()
+        fig.savefig(folder / "particles.png", dpi=120)
+        plt.close(fig)
+
+
+def zero_crossing_period(t: np.ndarray, signal: np.ndarray):
+    """Period of an oscillation about zero: twice the mean spacing of its zero crossings
+    (linear interpolation between samples); None with fewer than 3 crossings."""
+    k = np.nonzero(np.sign(signal[1:]) * np.sign(signal[:-1]) < 0)[0]
+    if len(k) < 3:
+        return None
+    crossings = t[k] - signal[k] * (t[k + 1] - t[k]) / (signal[k + 1] - signal[k])
+    return float(2.0 * np.mean(np.diff(crossings)))
+
+
+def impactor_shape(x: np.ndarray, setup: problem.Setup, body: int) -> dict:
+    """Final length and footprint (impact-face) diameter of the impactor rod from its particles:
+    length = axial extent of the particle centres + one spacing s; footprint = 2 (largest
+    distance from the rod's axis among the particles within s of the anvil-side end + s/2)."""
+    mine = setup.body == body
+    pts = x[:setup.body.size][mine]
+    s = float(setup.spacing[mine][0])
+    axial = pts[:, -1]
+    axis = np.asarray(setup.grid.origin[:-1], float)
+    radial = np.linalg.norm(pts[:, :-1] - axis, axis=1)
+    face = axial <= np.min(axial) + s
+    return {"final_length": float(np.max(axial) - np.min(axial) + s),
+            "footprint_diameter": float(2.0 * (np.max(radial[face]) + 0.5 * s))}
+
+
+METHOD = register(MPM())

@@ -1,0 +1,214 @@
+"""Scenario schema of the Material Point Method (``method = "mpm"``).
+
+Geometry is data: the grid box, bodies, the impactor, tracers and gauges are
+given in metres; ``grid.cells`` is the number of cells along x, every cell is a
+square/cube of side h = (upper - lower)_x / cells and the other extents must
+hold a whole number of cells.
+
+Axes: x (, y (, z)) in 1, 2 (plane strain) and 3 dimensions; with
+``grid.axisymmetric = true`` a 2D grid is r-z (x = r >= 0, y = z, the axis of
+revolution at r = 0, where the lower x face must be ``slip``).
+
+Tables:
+
+* ``[grid]``: lower, upper, cells, axisymmetric, ``[grid.boundaries]`` x/y/z =
+  [lower face, upper face] of "free", "slip" (symmetry: zero normal velocity),
+  "fixed" (zero velocity);
+* ``[[bodies]]``: boxes or cylinders of one library material each, filled with
+  ``particles_per_cell`` particles per cell and direction;
+* ``[impactor]``: a rod (Taylor bar) striking the lower face of the last axis;
+* ``[numerics]``: shape ("linear" | "gimp"), cfl, bulk-viscosity coefficients, capacity;
+* ``gravity``: body force per unit mass [m/s^2];
+* ``[output]``: the shared keys plus ``tracers``.
+"""
+from __future__ import annotations
+
+from typing import Annotated, ClassVar, Literal, Optional, Union
+
+from pydantic import Field, field_validator, model_validator
+
+from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
+from blastfsi.scenario import Numerics as SharedNumerics
+from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, gauge_points
+
+Vector = Union[float, list[float]]
+AXES = ("x", "y", "z")
+FaceKind = Literal["free", "slip", "fixed"]
+FacePair = Annotated[list[FaceKind], Field(min_length=2, max_length=2)]
+
+
+class Boundaries(Strict):
+    """Kind of each grid face, [lower, upper] per axis."""
+
+    x: FacePair = ["free", "free"]
+    y: FacePair = ["free", "free"]
+    z: FacePair = ["free", "free"]
+
+
+class GridSpec(Strict):
+    lower: list[float] = Field(min_length=1, max_length=3, description="lower corner [m]")
+    upper: list[float] = Field(min_length=1, max_length=3, description="upper corner [m]")
+    cells: int = Field(ge=2, le=100_000, description="cells along x (square/cubic cells)")
+    axisymmetric: bool = Field(False, description="2D r-z grid (x = r >= 0, y = z)")
+    boundaries: Boundaries = Boundaries()
+
+    @model_validator(mode="after")
+    def _box(self):
+        if len(self.lower) != len(self.upper):
+            raise ValueError(f"grid.lower and grid.upper need the same number of coordinates, got "
+                             f"{len(self.lower)} and {len(self.upper)}")
+        for ax, lo, hi in zip(AXES, self.lower, self.upper):
+            if not hi > lo:
+                raise ValueError(f"grid.upper[{ax}] ({hi}) must exceed grid.lower[{ax}] ({lo})")
+        if self.axisymmetric and self.ndim != 2:
+            raise ValueError(f"grid.axisymmetric needs a 2D (r, z) grid, got {self.ndim} axis/axes")
+        if self.axisymmetric and self.lower[0] < 0.0:
+            raise ValueError(f"grid.lower[x] is the radius of an axisymmetric grid and must be >= 0 "
+                             f"(got {self.lower[0]})")
+        if self.axisymmetric and self.lower[0] == 0.0 and self.boundaries.x[0] != "slip":
+            raise ValueError("grid.boundaries.x: an axisymmetric grid starting at r = 0 needs 'slip' on its lower "
+                             f"x face (the axis), got {self.boundaries.x[0]!r}")
+        return self
+
+    @property
+    def ndim(self) -> int:
+        return len(self.lower)
+
+
+class Body(Strict):
+    """A body of one material: a box [lower, upper], or a cylinder (2D plane strain: a disk
+    of ``radius`` around ``center``; 3D: axis along z through ``center`` (its mid-point),
+    ``length`` along z; axisymmetric: a box r in [0, radius], z in center +- length/2)."""
+
+    shape: Literal["box", "cylinder"] = "box"
+    lower: Optional[list[float]] = Field(None, min_length=1, max_length=3, description="box lower corner [m]")
+    upper: Optional[list[float]] = Field(None, min_length=1, max_length=3, description="box upper corner [m]")
+    center: Optional[list[float]] = Field(None, min_length=2, max_length=3, description="cylinder centre [m]")
+    radius: Optional[float] = Field(None, gt=0.0, description="cylinder radius [m]")
+    length: Optional[float] = Field(None, gt=0.0, description="cylinder length along its axis [m] (not in 2D plane)")
+    material: str = Field(min_length=1, description="material name from the library")
+    velocity: Vector = Field(0.0, description="initial velocity [m/s]: x component, or one value per axis")
+    velocity_profile: Literal["uniform", "sine"] = Field("uniform", description=(
+        "'sine': velocity * sin(pi (X - lower_x) / (2 L)), L the body's x extent: the first axial mode of a "
+        "bar fixed at its lower x end and free at the other"))
+    prescribed: bool = Field(False, description="the body moves with its initial velocity throughout (impactor)")
+    particles_per_cell: int = Field(2, ge=1, le=8, description="particles per cell and direction")
+    density: Optional[float] = Field(None, gt=0.0, description="initial density of a gas [kg/m^3] "
+                                                                "(default: the library's)")
+    pressure: Optional[float] = Field(None, gt=0.0, description="initial pressure of a gas [Pa] "
+                                                                "(default: the library's ambient pressure)")
+    top_traction: Optional[Vector] = Field(None, description=(
+        "traction [Pa] on the body's upper face along the last axis, one value (normal, along the last axis) "
+        "or one per axis; spread over the top particle layer, 000 Eq. (20)"))
+
+    @model_validator(mode="after")
+    def _geometry(self):
+        if self.shape == "box":
+            if self.lower is None or self.upper is None:
+                raise ValueError("a box body needs lower and upper")
+            if any(k is not None for k in (self.center, self.radius, self.length)):
+                raise ValueError("a box body takes lower and upper, not center/radius/length")
+            if len(self.lower) != len(self.upper):
+                raise ValueError("body lower and upper need the same number of coordinates")
+            for ax, lo, hi in zip(AXES, self.lower, self.upper):
+                if not hi > lo:
+                    raise ValueError(f"body upper[{ax}] ({hi}) must exceed lower[{ax}] ({lo})")
+        else:
+            if self.center is None or self.radius is None:
+                raise ValueError("a cylinder body needs center and radius")
+            if self.lower is not None or self.upper is not None:
+                raise ValueError("a cylinder body takes center, radius and length, not lower/upper")
+        return self
+
+
+class Impactor(Strict):
+    """A rod of ``length`` and ``diameter`` moving at ``velocity`` towards the lower face of the
+    last axis (y in 2D, z in 3D), its axis on the lower faces of the other axes (r = 0 of an
+    axisymmetric grid; symmetry planes in Cartesian grids: give them 'slip'): the Taylor test."""
+
+    material: str = Field(min_length=1, description="material name from the library")
+    velocity: float = Field(gt=0.0, le=1e4, description="impact speed [m/s]")
+    length: float = Field(gt=0.0, description="rod length [m]")
+    diameter: float = Field(gt=0.0, description="rod diameter [m]")
+    standoff: float = Field(0.0, ge=0.0, description="gap between the rod's face and the anvil face [m]")
+    particles_per_cell: int = Field(2, ge=1, le=8, description="particles per cell and direction")
+
+
+class MPMNumerics(SharedNumerics):
+    shape: Literal["linear", "gimp"] = Field("linear", description="grid shape functions: 000 Eq. (16) or uGIMP")
+    cfl: float = Field(0.5, gt=0.0, le=1.0, description="dt = cfl h / max signal speed")
+    q_quadratic: float = Field(DEFAULT_QUADRATIC, ge=0.0, le=10.0, description="bulk viscosity C_q (ERRATA 000-10)")
+    q_linear: float = Field(DEFAULT_LINEAR, ge=0.0, le=10.0, description="bulk viscosity C_l (ERRATA 000-10)")
+    capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
+        "particle pool size (default: the particles the bodies create)"))
+
+
+class MPMOutput(Output):
+    tracers: list[list[float]] = Field(default_factory=list, max_length=100, description=(
+        "points [m] whose displacement history is recorded: the particle nearest to each at t = 0"))
+
+
+class MPMSweep(Sweep):
+    """Ensemble over the impact speed or the Courant number."""
+
+    TARGETS: ClassVar[dict[str, str]] = {"velocity": "impactor.velocity", "cfl": "numerics.cfl"}
+    velocity: Optional[list[Annotated[float, Field(gt=0.0, le=1e4)]]] = Field(None, min_length=1)
+    cfl: Optional[list[Annotated[float, Field(gt=0.0, le=1.0)]]] = Field(None, min_length=1)
+
+
+class MPMScenario(ScenarioBase):
+    method: Literal["mpm"] = "mpm"
+    grid: GridSpec
+    bodies: list[Body] = Field(default_factory=list, max_length=100)
+    impactor: Optional[Impactor] = None
+    materials: dict[str, dict[str, float]] = Field(
+        default_factory=dict, description="per-material overrides of library constants, e.g. "
+                                          "{copper-ofhc = {A = 9.0e7}}")
+    gravity: list[float] = Field(default_factory=list, max_length=3, description="body force per unit mass [m/s^2]")
+    numerics: MPMNumerics = MPMNumerics()
+    output: MPMOutput = MPMOutput()
+    sweep: Optional[MPMSweep] = None
+
+    @field_validator("gravity")
+    @classmethod
+    def _finite(cls, value):
+        if any(abs(g) > 1e9 for g in value):
+            raise ValueError(f"gravity components must lie within +-1e9 m/s^2, got {value}")
+        return value
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        g = self.grid
+        nd = g.ndim
+        if not self.bodies and self.impactor is None:
+            raise ValueError("bodies: give at least one [[bodies]] entry or an [impactor]")
+        if self.gravity and len(self.gravity) != nd:
+            raise ValueError(f"gravity: expected {nd} component(s), got {len(self.gravity)}")
+        gauge_points(self.output.gauges, nd, g.lower, g.upper)
+        for k, p in enumerate(self.output.tracers):
+            if len(p) != nd:
+                raise ValueError(f"output.tracers[{k}] = {p}: expected {nd} coordinate(s)")
+        for k, b in enumerate(self.bodies):
+            key = f"bodies[{k}]"
+            for name in ("lower", "upper"):
+                value = getattr(b, name)
+                if value is not None and len(value) != nd:
+                    raise ValueError(f"{key}.{name}: expected {nd} coordinate(s), got {len(value)}")
+            if b.shape == "cylinder":
+                if nd == 1:
+                    raise ValueError(f"{key}.shape: a cylinder needs a 2D or 3D grid")
+                if len(b.center) != nd:
+                    raise ValueError(f"{key}.center: expected {nd} coordinate(s), got {len(b.center)}")
+                plane = nd == 2 and not g.axisymmetric
+                if plane and b.length is not None:
+                    raise ValueError(f"{key}.length: a cylinder in a 2D plane-strain grid is a disk; omit length")
+                if not plane and b.length is None:
+                    raise ValueError(f"{key}.length: a cylinder in a {'3D' if nd == 3 else 'r-z'} grid needs length")
+                if g.axisymmetric and b.center[0] != 0.0:
+                    raise ValueError(f"{key}.center: a cylinder on an axisymmetric grid lies on the axis, "
+                                     f"center[r] must be 0 (got {b.center[0]})")
+        if self.impactor is not None and nd == 1:
+            raise ValueError("impactor: needs a 2D or 3D grid (the rod's axis is the last axis)")
+        if self.sweep is not None and self.sweep.velocity is not None and self.impactor is None:
+            raise ValueError("sweep.velocity needs an [impactor]")
+        return self

@@ -1,0 +1,265 @@
+"""Initial particles and grid of the MPM method from a validated scenario (host side, NumPy).
+
+Materials get indices in order of first use (bodies, then the impactor). Each
+body is a lattice of ``particles_per_cell`` particles per cell and direction
+(:func:`blastfsi.mpm.lattice`, spacing s = h / particles_per_cell) over its
+bounding box, cut to its shape. Gas bodies start at the given density and
+pressure (energy from the EOS, stress -p I); solids start unstressed at the
+library's reference density.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from blastfsi import mpm
+from blastfsi.constitutive import get as get_model
+from blastfsi.constitutive import models as _models  # noqa: F401  (registers the constitutive models)
+from blastfsi.eos import jwl
+from blastfsi.materials import MaterialError, lookup
+from blastfsi.mpm.scenario import AXES, MPMScenario
+from blastfsi.scenario import ScenarioError
+
+FLUID = "fluid"
+
+
+@dataclass(frozen=True)
+class Setup:
+    grid: mpm.Grid
+    materials: tuple[str, ...]  # library names, by material index
+    models: tuple  # constitutive Model per material
+    model_params: tuple  # host-side model parameters per material
+    particles: mpm.Particles  # the pool (capacity slots, active first)
+    body: np.ndarray  # (n_active,) body index of each created particle (the impactor last)
+    spacing: np.ndarray  # (n_active,) particle spacing s [m]
+    tracers: tuple[int, ...]  # particle index of each tracer
+    gauges: np.ndarray  # (G, ndim) gauge points [m]
+    prescribed: bool
+    info: dict = field(default_factory=dict)
+
+    @property
+    def cells(self) -> int:
+        return int(np.prod(self.grid.cells))
+
+    @property
+    def ndim(self) -> int:
+        return self.grid.dim
+
+
+def model_name(material) -> str:
+    """The registered constitutive model of a library entry (gases: ``fluid``)."""
+    return getattr(type(material), "model", FLUID)
+
+
+def grid_of(sc: MPMScenario) -> mpm.Grid:
+    g = sc.grid
+    h = (g.upper[0] - g.lower[0]) / g.cells
+    cells = []
+    for ax, lo, hi in zip(AXES, g.lower, g.upper):
+        n = (hi - lo) / h
+        if abs(n - round(n)) > 1e-6 * max(n, 1.0):
+            raise ScenarioError(f"grid: the {ax} extent {hi - lo:g} m is not a whole number of cells of h = {h:g} m "
+                                f"(grid.cells = {g.cells} along x); adjust grid.upper or grid.cells")
+        cells.append(int(round(n)))
+    faces = tuple(tuple(getattr(g.boundaries, ax)) for ax in AXES[:g.ndim])
+    return mpm.Grid(origin=tuple(g.lower), cell_size=h, cells=tuple(cells), boundaries=faces,
+                    axisymmetric=g.axisymmetric)
+
+
+def _vector(value, ndim: int, key: str, along_last: bool = False) -> np.ndarray:
+    v = np.atleast_1d(np.asarray(value, float))
+    if v.size == 1 and ndim > 1:
+        one = float(v[0])
+        v = np.zeros(ndim)
+        v[-1 if along_last else 0] = one
+    if v.size != ndim:
+        raise ScenarioError(f"{key}: give one component or {ndim} (one per axis), got {v.size}")
+    return v
+
+
+def _material(sc: MPMScenario, name: str, key: str):
+    try:
+        return lookup(name, sc.materials.get(name), field=key)
+    except MaterialError as err:
+        raise ScenarioError(str(err)) from None
+
+
+def _box_of(body, grid: mpm.Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Bounding box [lower, upper] of a body."""
+    if body.shape == "box":
+        return np.asarray(body.lower, float), np.asarray(body.upper, float)
+    c = np.asarray(body.center, float)
+    if grid.axisymmetric:
+        return np.array([0.0, c[1] - 0.5 * body.length]), np.array([body.radius, c[1] + 0.5 * body.length])
+    half = np.full(grid.dim, body.radius)
+    if grid.dim == 3:
+        half[2] = 0.5 * body.length
+    return c - half, c + half
+
+
+def _inside(body, x: np.ndarray, grid: mpm.Grid) -> np.ndarray:
+    """Which positions (n, >= ndim) lie in the body (closed shape)."""
+    d = grid.dim
+    lo, hi = _box_of(body, grid)
+    box = np.all((x[:, :d] >= lo) & (x[:, :d] <= hi), axis=1)
+    if body.shape == "box" or grid.axisymmetric:
+        return box
+    c = np.asarray(body.center, float)
+    return box & (np.hypot(x[:, 0] - c[0], x[:, 1] - c[1]) <= body.radius)
+
+
+def _fill(grid: mpm.Grid, lower, upper, per_cell: int, key: str):
+    """Lattice positions, volumes and GIMP half-sizes in [lower, upper], with errors naming ``key``."""
+    g_lo, g_hi = np.asarray(grid.origin), np.asarray(grid.upper)
+    tol = 1e-9 * grid.cell_size
+    if np.any(lower < g_lo - tol) or np.any(upper > g_hi + tol):
+        raise ScenarioError(f"{key}: the body [{list(lower)}, {list(upper)}] m leaves the grid "
+                            f"[{list(g_lo)}, {list(g_hi)}] m")
+    small = (upper - lower) < grid.cell_size * (1.0 - 1e-9)
+    if np.any(small):
+        ax = AXES[int(np.argmax(small))]
+        raise ScenarioError(f"{key}: the body is {float((upper - lower)[small][0]):g} m thick along {ax}, less than "
+                            f"one cell (h = {grid.cell_size:g} m); refine grid.cells or enlarge the body")
+    return mpm.lattice(grid, np.clip(lower, g_lo, g_hi), np.clip(upper, g_lo, g_hi), per_cell)
+
+
+def _initial_gas_state(material, density, pressure, key: str):
+    """(density, specific energy, pressure) of a gas body."""
+    rho = material.density if density is None else density
+    if pressure is None:
+        if not hasattr(material, "pressure"):
+            raise ScenarioError(f"{key}.pressure: give the initial pressure of the {type(material).__name__} gas")
+        pressure = material.pressure
+    e = float(jwl.energy(rho, pressure, material.eos_params()))
+    if not e > 0.0:
+        raise ScenarioError(f"{key}.pressure: {pressure:g} Pa at density {rho:g} kg/m^3 gives a non-positive "
+                            "internal energy")
+    return rho, e, pressure
+
+
+def build(sc: MPMScenario) -> Setup:
+    grid = grid_of(sc)
+    d = grid.dim
+    names: list[str] = []
+    library: dict[str, object] = {}
+
+    def index(name: str, key: str) -> int:
+        if name not in library:
+            library[name] = _material(sc, name, key)
+            names.append(name)
+        return names.index(name)
+
+    batches, body_ids, spacings, extents = [], [], [], []
+    for k, b in enumerate(sc.bodies):
+        key = f"bodies[{k}]"
+        mat_index = index(b.material, f"{key}.material")
+        mat = library[b.material]
+        lower, upper = _box_of(b, grid)
+        x, vol, half = _fill(grid, lower, upper, b.particles_per_cell, key)
+        keep = _inside(b, x, grid)
+        if not keep.any():
+            raise ScenarioError(f"{key}: the body holds no particle; enlarge it or refine grid.cells")
+        x, vol, half = x[keep], vol[keep], half[keep]
+        for j, other in enumerate(sc.bodies[:k]):
+            clash = _inside(other, x, grid)
+            if clash.any():
+                raise ScenarioError(f"bodies[{j}] and {key} overlap (e.g. at {x[clash][0, :d].tolist()} m); "
+                                    "bodies must not share volume")
+        s = grid.cell_size / b.particles_per_cell
+        v = np.zeros((len(vol), 3))
+        v[:, :d] = _vector(b.velocity, d, f"{key}.velocity")
+        if b.velocity_profile == "sine":
+            v *= np.sin(0.5 * np.pi * (x[:, :1] - lower[0]) / (upper[0] - lower[0]))
+        is_gas = model_name(mat) == FLUID
+        if not is_gas and (b.density is not None or b.pressure is not None):
+            raise ScenarioError(f"{key}: density and pressure are initial states of gases; {b.material!r} is a "
+                                f"solid (override its reference density under materials.{b.material})")
+        if is_gas:
+            rho, energy, p = _initial_gas_state(mat, b.density, b.pressure, key)
+            stress = [-p, -p, -p, 0.0, 0.0, 0.0]
+        else:
+            rho, energy, stress = mat.density, 0.0, None
+        load = None
+        if b.top_traction is not None:
+            traction = np.zeros(3)
+            traction[:d] = _vector(b.top_traction, d, f"{key}.top_traction", along_last=True)
+            top = x[:, d - 1] > np.max(x[:, d - 1]) - 0.5 * s
+            load = np.where(top[:, None], mpm.surface_load(traction, s), 0.0)
+        batches.append(dict(x=x, volume=vol, density=rho, v=v, material=mat_index, half_size=half, stress=stress,
+                            energy=energy, prescribed=v if b.prescribed else None, surface_load=load))
+        body_ids.append(np.full(len(vol), k))
+        spacings.append(np.full(len(vol), s))
+        extents.append(float(upper[0] - lower[0]))
+
+    imp = sc.impactor
+    if imp is not None:
+        key = "impactor"
+        mat_index = index(imp.material, f"{key}.material")
+        mat = library[imp.material]
+        if model_name(mat) == FLUID:
+            raise ScenarioError(f"impactor.material: {imp.material!r} is a gas; the impactor is a solid rod")
+        lower = np.asarray(grid.origin, float).copy()
+        upper = lower.copy()
+        upper[:d - 1] += 0.5 * imp.diameter
+        lower[d - 1] += imp.standoff
+        upper[d - 1] = lower[d - 1] + imp.length
+        x, vol, half = _fill(grid, lower, upper, imp.particles_per_cell, key)
+        if d == 3:
+            keep = np.hypot(x[:, 0] - grid.origin[0], x[:, 1] - grid.origin[1]) <= 0.5 * imp.diameter
+            x, vol, half = x[keep], vol[keep], half[keep]
+        for j, other in enumerate(sc.bodies):
+            clash = _inside(other, x, grid)
+            if clash.any():
+                raise ScenarioError(f"bodies[{j}] and the impactor overlap (e.g. at {x[clash][0, :d].tolist()} m)")
+        v = np.zeros((len(vol), 3))
+        v[:, d - 1] = -imp.velocity
+        batches.append(dict(x=x, volume=vol, density=mat.density, v=v, material=mat_index, half_size=half,
+                            stress=None, energy=0.0, prescribed=None, surface_load=None))
+        body_ids.append(np.full(len(vol), len(sc.bodies)))
+        spacings.append(np.full(len(vol), grid.cell_size / imp.particles_per_cell))
+
+    history = max(get_model(model_name(library[n])).history_size for n in names)
+    parts = [mpm.new_particles(b.pop("x")[:, :d], b.pop("volume"), b.pop("density"), history_size=history, **b)
+             for b in batches]
+    batch = mpm.concatenate(*parts)
+    n = int(np.asarray(batch.active).sum())
+    capacity = sc.numerics.capacity or n
+    if capacity < n:
+        raise ScenarioError(f"numerics.capacity = {capacity} is too small: the bodies hold {n} particles; "
+                            f"set numerics.capacity >= {n}")
+    pool = mpm.make_pool(batch, capacity)
+    models = tuple(get_model(model_name(library[n_])) for n_ in names)
+    params = []
+    for name, model in zip(names, models):
+        try:
+            params.append(model.params_from(library[name]))
+        except ValueError as err:
+            raise ScenarioError(f"materials.{name}: {err}") from None
+    x0 = np.asarray(pool.x)[:n, :d]
+    tracers = []
+    for k, p in enumerate(sc.output.tracers):
+        dist = np.linalg.norm(x0 - np.asarray(p, float), axis=1)
+        j = int(np.argmin(dist))
+        if dist[j] > grid.cell_size:
+            raise ScenarioError(f"output.tracers[{k}] = {p} m: no particle within one cell (h = {grid.cell_size:g} m)")
+        tracers.append(j)
+    gauges = np.asarray(sc.output.gauges, float).reshape(-1, d)
+    body = np.concatenate(body_ids)
+    spacing = np.concatenate(spacings)
+    mass = np.asarray(pool.mass)[:n]
+    speeds = np.asarray(mpm.initialize(pool, mpm.make_params(params), mpm.make_config(grid, models))
+                        .particles.wave_speed)[:n]
+    info = {"cell_size": grid.cell_size, "grid_cells": list(grid.cells), "materials": names,
+            "models": [m.name for m in models], "shape": sc.numerics.shape,
+            "numerics": {k: getattr(sc.numerics, k) for k in ("cfl", "q_quadratic", "q_linear")},
+            "gravity": list(sc.gravity) or [0.0] * d,
+            "bodies": [{"material": (sc.bodies[k].material if k < len(sc.bodies) else imp.material),
+                        "particles": int(np.sum(body == k)), "mass": float(np.sum(mass[body == k])),
+                        "wave_speed": float(np.max(speeds[body == k]))}
+                       for k in range(len(sc.bodies) + (imp is not None))]}
+    sine = [k for k, b in enumerate(sc.bodies) if b.velocity_profile == "sine"]
+    if sine:  # fixed-free bar, first mode: T = 4 L / c (c the longitudinal wave speed)
+        info["period_theory"] = 4.0 * extents[sine[0]] / info["bodies"][sine[0]]["wave_speed"]
+    return Setup(grid, tuple(names), models, tuple(params), pool, body, spacing, tuple(tracers), gauges,
+                 any(b.prescribed for b in sc.bodies), info)

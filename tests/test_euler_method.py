@@ -1,0 +1,142 @@
+"""The euler method through the one driver and the public API: Sod against the exact
+solution, fields and ParaView output read back with vtk, restart bit for bit, ensembles,
+gauges, and malformed multi-D scenarios rejected with the key named."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import blastfsi
+from blastfsi.exact.riemann import sod_000
+from blastfsi.scenario import ScenarioError, parse
+
+FAST = {"output.plots": False}
+
+
+def test_sod_l1_error_within_the_smearing_bound():
+    """Both schemes at 200 cells. A captured discontinuity spreads over a few cells, so the
+    L1 density error is bounded by (about 5 cells) x dx x (total variation of the exact
+    density); measured errors are 4-6 times smaller."""
+    case = sod_000()
+    for scheme in ("lax-wendroff", "hllc-muscl"):
+        res = blastfsi.run("sod", set={"grid.cells": 200, "numerics.scheme": scheme, "output.fields": 0, **FAST})
+        f = res.fields()
+        rho, u, p = case.problem(f["x"], 1.43e-4)
+        dx = 1e-3 / 200
+        l1 = np.sum(np.abs(f["density"] - rho)) * dx
+        assert l1 < 5 * dx * np.sum(np.abs(np.diff(rho))), (scheme, l1)
+        assert f["velocity"].shape == (200, 1)
+        s = res.summary
+        assert {"time", "steps", "cells", "wall_time", "compile_time"} <= s.keys()
+        assert s["cells"] == 200 and s["time"] == pytest.approx(1.43e-4, rel=1e-15)
+        assert abs(s["mass_change_relative"]) < 1e-13  # nothing has reached the outflow ends
+
+
+def test_two_dimensional_fields_paraview_series_and_gauges(tmp_path):
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+
+    out = tmp_path / "s2"
+    res = blastfsi.run("sedov-2d", out=out, set={"grid.cells": 24, "time.end": 0.2, "output.fields": 3})
+    f = res.fields()
+    assert f["x"].shape == f["y"].shape == f["density"].shape == (24, 24)
+    assert f["velocity"].shape == (24, 24, 2)
+    assert np.all(f["x"][1:, 0] > f["x"][:-1, 0]) and np.all(f["y"][0, 1:] > f["y"][0, :-1])
+    for key in ("peak_overpressure", "arrival_time", "positive_impulse", "positive_duration", "internal_energy"):
+        assert key in f
+    # gauges symmetric about the diagonal read the same
+    g = res.summary["gauges"]
+    assert g[0]["peak_overpressure"] == pytest.approx(g[1]["peak_overpressure"], rel=1e-12)
+    assert g[0]["arrival_time"] == pytest.approx(g[1]["arrival_time"], rel=1e-12)
+    assert (out / "plots" / "pressure.png").is_file() and (out / "plots" / "gauges.png").is_file()
+    reader = vtk.vtkXdmfReader()
+    reader.SetFileName(str(out / "fields" / "member0.xdmf"))
+    reader.UpdateInformation()
+    times = reader.GetOutputInformation(0).Get(vtk.vtkStreamingDemandDrivenPipeline.TIME_STEPS())
+    assert len(times) == 3 and times[-1] == pytest.approx(0.2)
+    reader.UpdateTimeStep(times[-1])
+    grid = reader.GetOutputDataObject(0)
+    if grid.IsA("vtkMultiBlockDataSet"):
+        grid = grid.GetBlock(0)
+    assert grid.GetNumberOfCells() == 24 * 24
+    p = vtk_to_numpy(grid.GetCellData().GetArray("pressure"))
+    np.testing.assert_allclose(np.sort(p), np.sort(f["pressure"].ravel()), rtol=1e-15)
+    again = res.fields(time=0.2)
+    np.testing.assert_array_equal(again["pressure"], f["pressure"])
+
+
+def test_restart_is_bit_for_bit_and_ensemble(tmp_path):
+    base = {"grid.cells": 64, "time.end": 0.05, "output.fields": 2, "output.checkpoint_interval": 0.01,
+            "sweep.energy": [1.0, 2.0], **FAST}
+    a = blastfsi.run("sedov-spherical", out=tmp_path / "a", set=base)
+    b_dir = tmp_path / "b"
+    blastfsi.run("sedov-spherical", out=b_dir, set=base)
+    for ck in sorted((b_dir / "checkpoints").glob("ckpt_*.h5"))[2:]:
+        ck.unlink()
+    b = blastfsi.restart(b_dir)
+    fa, fb = a.fields(), b.fields()
+    for k in range(2):
+        for key in ("density", "pressure", "velocity"):
+            np.testing.assert_array_equal(fa[k][key], fb[k][key])
+    assert a.summary["steps"] == b.summary["steps"]
+    # the ensemble: twice the energy, same ambient -> front radius ratio 2^(1/5) (Sedov scaling)
+    from blastfsi.diagnostics.fronts import front_radius
+
+    r1 = front_radius(fa[0]["x"], fa[0]["density"], 1.0)
+    r2 = front_radius(fa[1]["x"], fa[1]["density"], 1.0)
+    dx = 1.2 / 64
+    assert r2 / r1 == pytest.approx(2 ** 0.2, abs=dx / r1)
+
+
+def _sedov2d(**over):
+    data = {"method": "euler", "name": "bad", "domain": {"lower": [-1.0, -1.0], "upper": [1.0, 1.0]},
+            "grid": {"cells": 20}, "time": {"end": 0.1},
+            "initial": {"kind": "point-energy", "energy": 1.0,
+                        "ambient": {"material": "air", "density": 1.0, "pressure": 1e-5}}}
+    for key, value in over.items():
+        node = data
+        parts = key.split(".")
+        for p in parts[:-1]:
+            node = node.setdefault(p, {})
+        node[parts[-1]] = value
+    return data
+
+
+BAD = [
+    ("initial.center", {"initial.center": [2.0, 0.0]}),
+    ("output.gauges[0]", {"output.gauges": [[0.0, 3.0]]}),
+    ("material", {"initial.ambient.material": "unobtainium"}),
+    ("materials", {"materials": {"air": {"gamma_typo": 1.3}}}),
+    ("initial.ambient.density", {"initial.ambient.density": -1.0}),
+    ("domain.lower[x]", {"domain.geometry": "axisymmetric", "domain.lower": [-0.5, -1.0]}),
+    ("boundaries.x", {"boundaries": {"x": ["outflow", "sticky"]}}),
+    ("boundaries.y", {"boundaries": {"y": ["periodic", "outflow"]}}),
+    ("numerics.scheme", {"numerics": {"scheme": "weno"}}),
+    ("domain", {"domain": {"lower": [-1.0, -1.0], "upper": [1.0, 1.05]}}),
+    ("grid.cells", {"grid.cells": 20.5}),
+    ("boundaries.x", {"domain.geometry": "axisymmetric", "domain.lower": [0.0, -1.0]}),
+    ("domain.upper", {"domain": {"lower": [-1.0, -1.0], "upper": [1.0]}}),
+]
+
+
+@pytest.mark.parametrize("key, over", BAD, ids=[b[0] + str(i) for i, b in enumerate(BAD)])
+def test_malformed_multid_scenarios_are_rejected_naming_the_key(key, over):
+    with pytest.raises(ScenarioError) as err:
+        sc = parse(_sedov2d(**over))
+        from blastfsi.problems.euler import build
+
+        build(sc)
+    assert key in str(err.value), str(err.value)
+
+
+def test_cli_rejects_bad_multid_scenario_with_exit_2(tmp_path):
+    import tomli_w
+
+    path = tmp_path / "bad.toml"
+    path.write_text(tomli_w.dumps(_sedov2d(**{"initial.ambient.material": "unobtainium"})))
+    proc = subprocess.run([sys.executable, "-m", "blastfsi.cli", "run", str(path), "--json"], capture_output=True,
+                          text=True, cwd=tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and "unobtainium" in proc.stderr
+    assert proc.stdout == "" and not (tmp_path / "results").exists()
