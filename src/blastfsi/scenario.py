@@ -140,6 +140,21 @@ class ScenarioBase(Strict):
         return d
 
 
+def cells_along(lower, upper, cells_x: int, key: str) -> tuple[float, tuple[int, ...]]:
+    """Square/cubic cells: the size dx = (upper - lower)_x / cells_x and the cell count
+    along every axis; a ScenarioError (naming ``key``) when an extent is not a whole
+    number of cells."""
+    dx = (upper[0] - lower[0]) / cells_x
+    counts = []
+    for ax, lo, hi in zip("xyz", lower, upper):
+        n = (hi - lo) / dx
+        if abs(n - round(n)) > 1e-6 * max(n, 1.0):
+            raise ScenarioError(f"{key}: the {ax} extent {hi - lo:g} m is not a whole number of cells of "
+                                f"{dx:g} m (grid.cells = {cells_x} along x); adjust the extent or grid.cells")
+        counts.append(int(round(n)))
+    return dx, tuple(counts)
+
+
 def gauge_points(gauges: list, ndim: int, lower, upper) -> list[tuple]:
     """The gauges as ndim-tuples, each checked to lie in the box [lower, upper]
     (per-axis sequences); a ValueError names the gauge and the domain's extent."""

@@ -8,19 +8,19 @@
   a face whose two reconstructed states still fail (rho, p or c^2 <= 0, a
   negative partial density, or NaN -- e.g. a JWL mixture whose c^2 turns
   negative) falls back to first order there (the two cell-centre states).
-* Flux: HLLC (Toro, Spruce & Speares 1994; Toro 2009 Sec. 10.4) with Einfeldt's
-  wave-speed estimates for a general EOS (Einfeldt 1988; Toro 2009 Eqs. 10.52-10.54):
+* Flux: HLLC (Toro, Spruce & Speares, Shock Waves 4, 1994; Toro, Riemann Solvers, 3rd ed., 2009) with Einfeldt's
+  wave-speed estimates for a general EOS (Einfeldt, SIAM J. Numer. Anal. 25, 1988; Toro 2009 Sec. 10.5.1):
       S_L = min(u_L - c_L, u~ - d~),  S_R = max(u_R + c_R, u~ + d~),
       u~ = (sqrt(rho_L) u_L + sqrt(rho_R) u_R) / (sqrt(rho_L) + sqrt(rho_R)),
       d~^2 = (sqrt(rho_L) c_L^2 + sqrt(rho_R) c_R^2) / (sqrt(rho_L) + sqrt(rho_R))
              + 1/2 sqrt(rho_L rho_R) / (sqrt(rho_L) + sqrt(rho_R))^2 (u_R - u_L)^2,
-  contact speed s* (Toro Eq. 10.37) and star states (Toro Eq. 10.39); the
+  contact speed s* and star states of Toro (2009) Sec. 10.4; the
   products fraction takes the HLLC flux of a volume-weighted passive scalar and
-  the face velocity of Johnsen & Colonius (2006) for its alpha div u term:
+  the face velocity of Johnsen & Colonius (J. Comput. Phys. 219, 2006) for its alpha div u term:
       F = w_L q_L v_L + w_R q_R v_R,  v_K = u_K + s_K (chi_K - 1),  chi_K = (S_K - u_K)/(S_K - s*),
       w_L = (1 + sign s*)/2, w_R = 1 - w_L, s_L = min(S_L, 0), s_R = max(S_R, 0),
   which is also the form used for the partial densities (q = alpha_k rho_k).
-* Time: SSP-RK2 (Shu & Osher 1988): U1 = U + dt L(U), U^{n+1} = (U + U1 + dt L(U1)) / 2.
+* Time: SSP-RK2 (Shu & Osher, J. Comput. Phys. 77, 1988): U1 = U + dt L(U), U^{n+1} = (U + U1 + dt L(U1)) / 2.
 """
 from __future__ import annotations
 
@@ -65,7 +65,7 @@ def hllc_flux(left: FaceState, right: FaceState, lay, axis):
     s_left = jnp.minimum(u_l - jnp.sqrt(left.c2), u_roe - d_roe)
     s_right = jnp.maximum(u_r + jnp.sqrt(right.c2), u_roe + d_roe)
     m_l, m_r = left.rho * (s_left - u_l), right.rho * (s_right - u_r)
-    s_star = (right.p - left.p + m_l * u_l - m_r * u_r) / (m_l - m_r)  # Toro Eq. (10.37)
+    s_star = (right.p - left.p + m_l * u_l - m_r * u_r) / (m_l - m_r)  # contact speed, Toro Sec. 10.4
     w_l = 0.5 * (1.0 + jnp.sign(s_star))
     wv, x_n, x_e = [], 0.0, 0.0
     for st, s_wave, s_k, w in ((left, s_left, jnp.minimum(s_left, 0.0), w_l),

@@ -1,7 +1,8 @@
 """Mixture equation of state of the five-equation model (ERRATA 000-9).
 
 Products (JWL) and air (ideal gas) share a cell through the reduced
-(Kapila / Allaire-Clerc-Kokh 2002) five-equation model: partial densities
+(Kapila) five-equation model of Allaire, Clerc & Kokh (J. Comput. Phys. 181,
+577-616, 2002; "ACK"): partial densities
 alpha_k rho_k, mixture momentum and total energy, and the products volume
 fraction alpha_0, with pressure equilibrium (isobaric closure). Every phase has
 Mie-Grueneisen form p_k = f_k(rho_k) + G_k rho_k e_k (blastfsi.eos.jwl, G = omega),
@@ -10,7 +11,7 @@ explicit mixture pressure
 
     p = (rho e + sum_k alpha_k f_k(rho_k) / G_k) / xi,        xi = sum_k alpha_k / G_k       (ACK 2002)
 
-and the mixture sound speed (ACK 2002, Eq. for the 5-equation model)
+and the (frozen) mixture sound speed of the five-equation model (ACK 2002)
 
     xi rho c^2 = sum_k (alpha_k / G_k) rho_k c_k^2,
     rho_k c_k^2 = rho_k f_k'(rho_k) + (1 + G_k) p - f_k(rho_k)          (blastfsi.eos.jwl.sound_speed_squared)

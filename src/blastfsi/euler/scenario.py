@@ -164,17 +164,7 @@ class EulerScenario(ScenarioBase):
         gauge_points(self.output.gauges, d.ndim, d.lower, d.upper)
         if self.sweep is not None and self.sweep.energy is not None and self.initial.kind != "point-energy":
             raise ValueError("sweep.energy needs initial.kind = 'point-energy'")
-        if self.initial.kind == "point-energy" and self.initial.center:
-            c = self.initial.center
-            if len(c) != d.ndim or not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper)):
-                extent = ", ".join(f"{a} in [{lo:g}, {hi:g}]" for a, lo, hi in zip(AXES, d.lower, d.upper))
-                raise ValueError(f"initial.center = {c} must be {d.ndim} coordinate(s) inside the domain ({extent} m)")
-        return self
-
-    @model_validator(mode="after")
-    def _charge_inside(self):
-        d = self.domain
-        if self.initial.kind == "charge" and self.initial.center:
+        if self.initial.kind in ("point-energy", "charge") and self.initial.center:
             c = self.initial.center
             if len(c) != d.ndim or not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper)):
                 extent = ", ".join(f"{a} in [{lo:g}, {hi:g}]" for a, lo, hi in zip(AXES, d.lower, d.upper))

@@ -12,7 +12,7 @@ import numpy as np
 from blastfsi.euler.scenario import AXES, EulerScenario
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import JWLExplosive
-from blastfsi.scenario import ScenarioError
+from blastfsi.scenario import ScenarioError, cells_along
 
 GEOMETRY_CODE = {"cartesian": 0, "cylindrical": 1, "spherical": 2, "axisymmetric": 1}
 BOUNDARY_CODE = {"outflow": 0, "wall": 1, "symmetry": 1, "axis": 2, "periodic": 3}
@@ -63,15 +63,8 @@ class Setup:
 
 def grid_geometry(sc: EulerScenario) -> GridGeometry:
     d = sc.domain
-    dx = (d.upper[0] - d.lower[0]) / sc.grid.cells
-    shape = []
-    for ax, lo, hi in zip(AXES, d.lower, d.upper):
-        n = (hi - lo) / dx
-        if abs(n - round(n)) > 1e-6 * max(n, 1.0):
-            raise ScenarioError(f"domain: the {ax} extent {hi - lo:g} m is not a whole number of cells of "
-                                f"dx = {dx:g} m (grid.cells = {sc.grid.cells} along x); adjust domain or grid.cells")
-        shape.append(int(round(n)))
-    return GridGeometry(tuple(shape), dx, tuple(d.lower), d.geometry)
+    dx, shape = cells_along(d.lower, d.upper, sc.grid.cells, "domain")
+    return GridGeometry(shape, dx, tuple(d.lower), d.geometry)
 
 
 def boundary_codes(sc: EulerScenario) -> tuple[tuple[int, int], ...]:

@@ -19,7 +19,7 @@ from blastfsi.constitutive import models as _models  # noqa: F401  (registers th
 from blastfsi.eos import jwl
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.mpm.scenario import AXES, MPMScenario
-from blastfsi.scenario import ScenarioError
+from blastfsi.scenario import ScenarioError, cells_along
 
 FLUID = "fluid"
 
@@ -54,14 +54,7 @@ def model_name(material) -> str:
 
 def grid_of(sc: MPMScenario) -> mpm.Grid:
     g = sc.grid
-    h = (g.upper[0] - g.lower[0]) / g.cells
-    cells = []
-    for ax, lo, hi in zip(AXES, g.lower, g.upper):
-        n = (hi - lo) / h
-        if abs(n - round(n)) > 1e-6 * max(n, 1.0):
-            raise ScenarioError(f"grid: the {ax} extent {hi - lo:g} m is not a whole number of cells of h = {h:g} m "
-                                f"(grid.cells = {g.cells} along x); adjust grid.upper or grid.cells")
-        cells.append(int(round(n)))
+    h, cells = cells_along(g.lower, g.upper, g.cells, "grid")
     faces = tuple(tuple(getattr(g.boundaries, ax)) for ax in AXES[:g.ndim])
     return mpm.Grid(origin=tuple(g.lower), cell_size=h, cells=tuple(cells), boundaries=faces,
                     axisymmetric=g.axisymmetric)
