@@ -213,25 +213,35 @@ def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids):
             "rows": rows}
 
 
-def _trace_breakdown(compiled, args, top):
-    """Per-op wall time of one call from a JAX profiler trace (XLA:CPU records one event per kernel):
-    shares of padding (fusions with a concatenate), copies and the other fusions, and the ``top`` slowest ops
-    with their time per output element."""
+def _output_sizes(hlo):
+    """Per top-level HLO instruction: (elements, bytes) of its output (all members of a tuple output)."""
+    import numpy as np
+    width = {"f64": 8, "s64": 8, "u64": 8, "f32": 4, "s32": 4, "u32": 4, "pred": 1, "s8": 1, "u8": 1}
+    sizes = {}
+    for m in re.finditer(r"^\s*%?(\S+) = (\(.*?\)|\w+\[[\d,]*\])\S* \w", hlo, re.M):
+        arrays = [(t, int(np.prod([int(v) for v in d.split(",") if v])))
+                  for t, d in re.findall(r"(\w+)\[([\d,]*)\]", m.group(2))]
+        sizes[m.group(1)] = (sum(k for _, k in arrays), sum(k * width.get(t, 8) for t, k in arrays))
+    return sizes
+
+
+def _trace_breakdown(compiled, args, cells, top):
+    """Per-kernel wall time of one call from a JAX profiler trace (XLA:CPU records one event per kernel):
+    shares of padding (fusions with a concatenate), copies and the other fusions; the bytes all kernels
+    write per cell (a lower bound of the traffic: reads come on top); the ``top`` slowest kernels with their
+    time per output element."""
     import glob
     import gzip
     import tempfile
     import jax
-    import numpy as np
-    hlo = compiled.as_text()
-    elems = {m.group(1): int(np.prod([int(v) for v in m.group(2).split(",") if v]))
-             for m in re.finditer(r"^\s*%?(\S+) = \w+\[([\d,]*)\]", hlo, re.M)}
+    sizes = _output_sizes(compiled.as_text())
     with tempfile.TemporaryDirectory() as tmp:
         with jax.profiler.trace(tmp, create_perfetto_trace=True):
             jax.block_until_ready(compiled(*args))
         events = json.load(gzip.open(glob.glob(f"{tmp}/**/*.trace.json.gz", recursive=True)[0]))["traceEvents"]
     per = {}
     for e in events:
-        if e.get("ph") == "X" and e["name"] in elems and not e["name"].startswith(("while", "cond", "call")):
+        if e.get("ph") == "X" and e["name"] in sizes and not e["name"].startswith(("while", "cond", "call")):
             dur, count = per.get(e["name"], (0.0, 0))
             per[e["name"]] = (dur + e["dur"], count + 1)
     total = sum(d for d, _ in per.values())
@@ -241,8 +251,9 @@ def _trace_breakdown(compiled, args, top):
             "padding (concatenate fusions)" if "concatenate" in name else "other fusions")
         shares[key] += dur / total
     slow = sorted(per.items(), key=lambda kv: -kv[1][0])[:top]
-    return {"kernel_time_ms": total / 1e3, "shares": shares,
-            "slowest": [{"op": k, "ms": d / 1e3, "calls": c, "ns_per_output_element": 1e3 * d / c / elems[k]}
+    return {"kernel_time_ms": total / 1e3, "kernel_launches": sum(c for _, c in per.values()), "shares": shares,
+            "bytes_written_per_cell": sum(c * sizes[k][1] for k, (_, c) in per.items()) / cells,
+            "slowest": [{"op": k, "ms": d / 1e3, "calls": c, "ns_per_output_element": 1e3 * d / c / sizes[k][0]}
                         for k, (d, c) in slow]}
 
 
@@ -280,7 +291,7 @@ def profile(n):
         compiled = jax.jit(lambda u, dt, p, c=c: euler.step(u, dt, p, c)).lower(U, dt, params).compile()
         _time(compiled, (U, dt, params), 1)
         out["step_traces"][scheme] = {"ns_per_cell_step": 1e9 * min(_time(compiled, (U, dt, params), 3)) / cells,
-                                      **_trace_breakdown(compiled, (U, dt, params), 8)}
+                                      **_trace_breakdown(compiled, (U, dt, params), cells, 8)}
     return out
 
 
@@ -370,8 +381,8 @@ def section_profile(n):
               f"{r['xla_flops_per_cell']:7.0f} flop/cell  {r['fused_kernels']:3d} kernels", flush=True)
     for scheme, tr in prof["step_traces"].items():
         shares = ", ".join(f"{k} {100 * v:.0f}%" for k, v in tr["shares"].items())
-        print(f"  one {scheme} step: {tr['ns_per_cell_step']:.0f} ns/cell-step, {tr['kernel_time_ms']:.0f} ms "
-              f"in kernels: {shares}")
+        print(f"  one {scheme} step: {tr['ns_per_cell_step']:.0f} ns/cell-step, {tr['kernel_launches']} kernel calls "
+              f"writing {tr['bytes_written_per_cell']:.0f} B/cell; {tr['kernel_time_ms']:.0f} ms in kernels: {shares}")
         for op in tr["slowest"]:
             print(f"      {op['op']:<34} {op['ms']:8.1f} ms  {op['calls']} calls  "
                   f"{op['ns_per_output_element']:6.1f} ns/output element")

@@ -194,12 +194,12 @@ def test_smooth_advection_order(scheme, ndim, grids):
 
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_interface_advection_keeps_pressure_and_velocity(scheme):
-    """A TNT-products slab (JWL, 1000 kg/m^3) in air (50 kg/m^3) at p = 1 GPa, u = 1 km/s is carried
+    """A TNT-products slab (JWL, 1000 kg/m^3) in air (50 kg/m^3) at p = 1 GPa, u = 2 km/s is carried
     once around a periodic 1 m domain. The five-equation model with the isobaric closure keeps
     p and u exactly uniform in exact arithmetic (ERRATA 000-9): both schemes update alpha with the
     weights of the partial densities. Bound 1e-3: a mass-fraction mixture would show O(10 %)
     pressure spikes at the interfaces; round-off gives ~1e-9 here."""
-    n, p0, u0 = 200, 1.0e9, 1000.0
+    n, p0, u0 = 100, 1.0e9, 2000.0
     cfg = euler.Config((n,), 1.0 / n, 0, ((euler.PERIODIC, euler.PERIODIC),), scheme, 2, (0.0,))
     x = centres(cfg)[0]
     alpha = np.where((x > 0.25) & (x < 0.75), 1.0, 0.0)
@@ -210,7 +210,7 @@ def test_interface_advection_keeps_pressure_and_velocity(scheme):
     assert float(jnp.max(jnp.abs(out["pressure"] / p0 - 1.0))) < 1e-3
     assert float(jnp.max(jnp.abs(out["velocity"][0] / u0 - 1.0))) < 1e-3
     # the slab came back: its volume is kept, and each interface is smeared over < 10 cells
-    assert abs(float(jnp.mean(out["alpha"])) - 0.5) < 1e-9  # alpha div u at round-off, ~2500 steps
+    assert abs(float(jnp.mean(out["alpha"])) - 0.5) < 1e-9  # alpha div u at round-off, ~700 steps
     assert float(jnp.mean(jnp.abs(out["alpha"] - alpha))) < 2 * 10 / n
 
 
@@ -225,8 +225,8 @@ def box_blast(scheme, n=16, centre=(0.4, 0.4, 0.4), bc=((euler.WALL, euler.WALL)
     return U, prm, cfg
 
 
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_closed_box_conserves_3d(scheme):
+@pytest.mark.parametrize("scheme", [euler.LAX_WENDROFF, pytest.param(euler.HLLC_MUSCL, marks=pytest.mark.slow)])
+def test_closed_box_conserves_3d(scheme):  # HLLC: 3D compile time; its 2D closed box runs by default
     """Closed box (walls on x and y, periodic in z), blast off-centre in all three directions, 20
     steps: the waves reach and reflect off the walls. Both schemes are in flux form, and a mirror
     wall passes no mass or energy: mass and energy change only by round-off, < 1e-12 per 1000 steps
