@@ -8,10 +8,12 @@
 gamma = 1.4, one material, outflow on all faces, a spherical blast (p = 10
 inside r < 0.2, p = 1 outside, rho = 1) in [-1, 1]^3. A jitted
 ``lax.fori_loop`` runs N steps at a fixed dt (half the initial CFL step) so the
-loop stays on the device; compilation and one warm-up step are excluded,
-N is chosen so one run lasts >= --min-time s, and the best of --repeats runs
-is reported as cell-steps/s = n^3 N / wall. float32 rows run in a subprocess
-with BLASTFSI_X64=0 (how blastfsi selects its precision, see blastfsi/__init__.py).
+loop stays on the device; compilation and warm-up calls are excluded; N is
+chosen so one call lasts >= --min-time s (default 10: a call's fixed costs, such
+as the first touch of its temporary buffers -- about 0.4 s at 128^3 float64 --
+then stay a few per cent), and cells x N / (best of --repeats calls) is
+reported. float32 rows run in a subprocess with BLASTFSI_X64=0 (how blastfsi
+selects its precision, see blastfsi/__init__.py).
 
 Memory-traffic model (bytes per cell-step, b = 8 (float64) or 4 (float32), five conservative fields):
 * lax-wendroff, split (000 Eq. 6): six directional operators per 3D step; each at
@@ -106,6 +108,9 @@ def _time(fn, args, repeats):
 
 
 def bench_3d(n, scheme, repeats, min_time, max_steps):
+    """cells x N / t(N), t the best of ``repeats`` calls of N steps, N chosen from a warm-up call so a call lasts
+    >= min_time: long calls make the per-call costs (dispatch, first touch of the call's temporary buffers,
+    reported as temp_bytes_per_call) small against the steps."""
     jax, jnp, np, euler, _ = _jax_setup()
     cfg, params, U, _ = _blast_state((n, n, n), -1.0, 1.0, SCHEMES[scheme], 0, ((0, 0),) * 3, 0.5)
     dt = 0.5 * euler.stable_dt(U, params, cfg)
@@ -119,34 +124,34 @@ def bench_3d(n, scheme, repeats, min_time, max_steps):
     compile_s = time.perf_counter() - t0
     warm = min(_time(compiled, (U, dt, params, one), 2))
     steps = int(min(max_steps, max(1, np.ceil(min_time / warm))))
+    args = (U, dt, params, jnp.asarray(steps, jnp.int32))
     load0, cpu0 = os.getloadavg()[0], time.process_time()
-    walls = _time(compiled, (U, dt, params, jnp.asarray(steps, jnp.int32)), repeats)
+    walls = _time(compiled, args, repeats)
     cpu_per_wall = (time.process_time() - cpu0) / sum(walls)
-    out = compiled(U, dt, params, jnp.asarray(steps, jnp.int32))
-    wall = min(walls)
+    out = compiled(*args)
     cells = n ** 3
-    row = {"size": n, "scheme": scheme, "dtype": str(U.dtype), "cells": cells, "steps": steps,
-           "compile_s": compile_s, "walls_s": walls, "wall_s": wall, "cell_steps_per_s": cells * steps / wall,
-           "finite": bool(jnp.all(jnp.isfinite(out))), "process_cpu_s_per_wall_s": cpu_per_wall,
-           "loadavg_1min_before": load0,
-           "loadavg_1min_after": os.getloadavg()[0]}
-    return row
+    return {"size": n, "scheme": scheme, "dtype": str(U.dtype), "cells": cells, "steps": steps,
+            "compile_s": compile_s, "walls_s": walls, "wall_s": min(walls),
+            "cell_steps_per_s": cells * steps / min(walls),
+            "temp_bytes_per_call": compiled.memory_analysis().temp_size_in_bytes,
+            "finite": bool(jnp.all(jnp.isfinite(out))), "process_cpu_s_per_wall_s": cpu_per_wall,
+            "loadavg_1min_before": load0, "loadavg_1min_after": os.getloadavg()[0]}
 
 
 def stream():
-    """STREAM-like copy and triad bandwidth [B/s], NumPy (one thread) and jitted JAX (all threads)."""
+    """STREAM-like bandwidth [B/s] on preallocated arrays (no first-touch page faults): NumPy copy and scale
+    (one thread), and jitted JAX scale and triad applied k times in place inside a fori_loop (all threads),
+    timed as (t(11) - t(1)) / 10 per pass; each byte read or written counted once."""
     jax, jnp, np, _, _ = _jax_setup()
     n = 1 << 25  # 256 MiB per float64 array: far beyond any cache
-    a, b, c = np.random.rand(n), np.empty(n), np.random.rand(n)
-    res = {}
-    res["numpy_copy"] = 2 * 8 * n / min(_time(lambda: np.copyto(b, a), (), 5))
-    res["numpy_triad"] = 3 * 8 * n / min(_time(lambda: np.add(a, 3.0 * c, out=b), (), 5))  # 3.0*c is a temporary
-    ja, jc = jnp.asarray(a), jnp.asarray(c)
-    scale = jax.jit(lambda x: 3.0 * x)
-    triad = jax.jit(lambda x, y: x + 3.0 * y)
-    _time(scale, (ja,), 1), _time(triad, (ja, jc), 1)
-    res["jax_scale"] = 2 * 8 * n / min(_time(scale, (ja,), 5))
-    res["jax_triad"] = 3 * 8 * n / min(_time(triad, (ja, jc), 5))
+    a, b = np.random.rand(n), np.random.rand(n)
+    res = {"numpy_copy": 16 * n / min(_time(lambda: np.copyto(b, a), (), 5)),
+           "numpy_scale": 16 * n / min(_time(lambda: np.multiply(a, 0.999, out=b), (), 5))}
+    ja, jb = jnp.asarray(a), jnp.asarray(b)
+    for name, body, nbytes in (("jax_scale", lambda i, v: v * 0.999, 16), ("jax_triad", lambda i, v: v + 0.5 * jb, 24)):
+        passes = jax.jit(lambda x, k, body=body: jax.lax.fori_loop(0, k, body, x))
+        t = {k: min(_time(passes, (ja, jnp.asarray(k)), 3 if k > 1 else 4)) for k in (1, 11)}
+        res[name] = nbytes * n * 10 / (t[11] - t[1])
     res["device"] = str(jax.devices()[0])
     return res
 
@@ -398,7 +403,7 @@ def main():
     ap.add_argument("--gpu", action="store_true", help="bound from --gpu-bandwidth, default sizes with 256")
     ap.add_argument("--gpu-bandwidth", type=float, default=H100_BANDWIDTH)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--min-time", type=float, default=2.0, help="seconds per timed run (chooses N)")
+    ap.add_argument("--min-time", type=float, default=10.0, help="seconds per timed call (chooses N)")
     ap.add_argument("--max-steps", type=int, default=500)
     ap.add_argument("--pyclaw", default=None, help="PyClaw .npz of bench_pyclaw.py; runs the 2D comparison")
     ap.add_argument("--pyclaw-python", default="/tmp/clawenv/bin/python")
