@@ -28,6 +28,13 @@ def test_charge_remapped_into_euler_conserves_and_runs():
     cfg = blastfsi.method.get("euler")._cfg(setup, parse(euler_charge()))
     mass, _, energy = kernels.total(U, cfg)
     assert float(mass) == pytest.approx(res.history["mass"][-1], rel=1e-12)
+    # products stay where the 1D solution put them: the grid holds the charge mass of products (closed domain)
+    # and the ambient air beyond the disturbed radius is untouched air
+    vol = kernels.geometry.cell_volumes(cfg, U.dtype)
+    assert float(jnp.sum(U[0] * vol)) == pytest.approx(info["charge_mass"], rel=1e-12)
+    far = res.fields()
+    assert np.all(far["products_fraction"][-10:] == 0.0)
+    assert far["density"][-10:] == pytest.approx(1.225, rel=1e-12)  # library air (ISA sea level)
     hist = res.history
     assert abs(hist["mass"][-1] / hist["mass"][0] - 1) < 1e-12  # closed until the blast reaches the outflow
     assert abs(hist["energy"][-1] / hist["energy"][0] - 1) < 1e-10

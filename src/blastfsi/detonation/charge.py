@@ -36,7 +36,7 @@ class ChargeFields(NamedTuple):
     materials: tuple
     eos: np.ndarray
     rho_k: np.ndarray
-    alpha: np.ndarray
+    alpha: np.ndarray  # (n_materials, *shape) volume fractions
     velocity: np.ndarray
     pressure: np.ndarray
     reference_pressure: float
@@ -170,5 +170,6 @@ def charge_initial(sc, g) -> ChargeFields:
             "remap_mass_error": float(np.sum(out.mass) / out.targets[0] - 1.0),
             "remap_products_error": float(np.sum(out.products) / out.targets[1] - 1.0),
             "remap_energy_error": float(np.sum(out.energy) / out.targets[2] - 1.0)}
-    return ChargeFields((init.explosive, air_name), eos, out.rho_k, out.alpha, out.velocity, out.pressure, float(p_a),
+    alpha = np.stack([out.alpha, 1.0 - out.alpha])  # (n_materials, *shape), the layout of the euler Setup
+    return ChargeFields((init.explosive, air_name), eos, out.rho_k, alpha, out.velocity, out.pressure, float(p_a),
                         info)
