@@ -5,17 +5,22 @@ VTK reports is checked against the function evaluated at the cell centre (point)
 of axes, a wrong origin/spacing order or a wrong memory order fails. The only tolerance is round-off in
 those coordinates (a few ulp of |x| ~ 1, amplified by the field's gradients ~ 10): rtol = atol = 1e-12.
 """
+import re
+
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import VTK_DOUBLE, VTK_FLOAT
+from vtkmodules.vtkCommonDataModel import vtkCompositeDataSet
 from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
 from vtkmodules.vtkFiltersCore import vtkCellCenters
 from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
 
-from blastfsi.io.fields import (read_grid_snapshot, read_particle_snapshot, write_grid_series, write_grid_snapshot,
-                                write_particle_series, write_particle_snapshot)
+from blastfsi.io import results
+from blastfsi.io.fields import (read_grid_snapshot, read_particle_snapshot, write_coupled_snapshot, write_grid_series,
+                                write_grid_snapshot, write_particle_series, write_particle_snapshot)
+from blastfsi.method import Coupled, Grid, Particles
 from blastfsi.plotting.fields import field_image, plot_pressure_field
 
 TOL = dict(rtol=1e-12, atol=1e-12)
@@ -260,3 +265,127 @@ def test_plot_pressure_field_writes_png(tmp_path, shape):
     assert picture.ndim == 3 and picture.shape[0] > 300 and picture.shape[1] > 400
     colours = np.unique(picture[..., :3].reshape(-1, 3), axis=0)
     assert len(colours) > (10 if len(shape) == 1 else 100)  # a curve / a colour map, not a blank canvas
+
+
+# ------------------------------------------------------------------------------- grid + particles (coupled)
+def coupled_member(origin, spacing, shape, t, count, rng, offset=0.0):
+    """A Coupled snapshot: grid fields analytic in the cell centres (scalar, vector, tensor), and ``count``
+    random particles in the grid's box with their own scalar, vector and tensor fields."""
+    ndim = len(shape)
+    centres = cell_centres(origin, spacing, shape)
+    x, y, z = (*centres, *[0.0] * (3 - ndim))
+    tensor = np.zeros(shape + (ndim, ndim))
+    tensor[..., 0, 1], tensor[..., 1, 0] = x, y
+    edges = tuple(o + d * np.arange(n + 1) for o, d, n in zip(origin, spacing, shape))
+    grid = Grid(edges=edges, cell_fields={"pressure": scalar_field(x, y, z, t) + offset,
+                                          "velocity": vector_field(x, y, z)[..., :ndim], "stress": tensor})
+    lo, hi = np.array(origin), np.array(origin) + np.array(spacing) * np.array(shape)
+    positions = rng.uniform(lo, hi, (count, ndim))
+    s = rng.normal(size=(count, ndim, ndim))
+    particles = Particles(positions=positions, point_fields={
+        "pressure": rng.random(count) + offset, "velocity": rng.normal(size=(count, ndim)), "stress": s + s.mT})
+    return Coupled(grid=grid, particles=particles)
+
+
+def blocks(multiblock):
+    """{name: dataset} of the blocks vtkXdmfReader makes of a spatial collection (it appends [k] to the names
+    of later time steps)."""
+    return {re.sub(r"\[\d+\]$", "", multiblock.GetMetaData(b).Get(vtkCompositeDataSet.NAME())): multiblock.GetBlock(b)
+            for b in range(multiblock.GetNumberOfBlocks())}
+
+
+def check_coupled_series(out, written, times, member, offset=0.0):
+    """Read member ``member`` (made with ``offset``) back through results.read_snapshot (exact) and through
+    vtkXdmfReader."""
+    for index, snap in enumerate(written):
+        back = results.read_snapshot(out, "coupled", index, member)
+        assert isinstance(back, Coupled)
+        assert len(back.grid.edges) == len(snap.grid.edges)
+        for e_back, e in zip(back.grid.edges, snap.grid.edges):  # origin + spacing * i: a few ulp of |x| ~ 1
+            np.testing.assert_allclose(e_back, e, **TOL)
+        np.testing.assert_array_equal(back.particles.positions, snap.particles.positions)
+        for part_back, part in ((back.grid.cell_fields, snap.grid.cell_fields),
+                                (back.particles.point_fields, snap.particles.point_fields)):
+            assert part_back.keys() == part.keys()
+            for name, array in part.items():
+                assert part_back[name].shape == array.shape, name
+                np.testing.assert_array_equal(part_back[name], array)
+    series = Series(out / "fields" / f"member{member}.xdmf")
+    assert series.times == times
+    for t, snap in zip(times, written):
+        parts = blocks(series.at(t))
+        assert sorted(parts) == ["grid", "particles"]
+        grid, cloud = parts["grid"], parts["particles"]
+        g, p = snap.grid, snap.particles
+        ndim, shape = len(g.edges), [len(e) - 1 for e in g.edges]
+        assert grid.GetNumberOfCells() == np.prod(shape)
+        bounds = np.array([(e[0], e[-1]) for e in g.edges] + [(0.0, g.edges[0][1] - g.edges[0][0])] * (3 - ndim))
+        np.testing.assert_allclose(grid.GetBounds(), bounds.ravel(), **TOL)
+        c = vtk_cell_centres(grid)
+        x, y, z = (*c[:, :ndim].T, *[0.0] * (3 - ndim))
+        np.testing.assert_allclose(cell_array(grid, "pressure"), scalar_field(x, y, z, t) + offset, **TOL)
+        velocity = cell_array(grid, "velocity")
+        np.testing.assert_allclose(velocity[:, :ndim], vector_field(x, y, z)[..., :ndim], **TOL)
+        assert np.all(velocity[:, ndim:] == 0.0)
+        stress = cell_array(grid, "stress")
+        assert stress.shape == (np.prod(shape), 9)
+        np.testing.assert_allclose(stress[:, [1, 3]], c[:, :2], **TOL)
+        assert np.all(stress[:, [0, 2, 4, 5, 6, 7, 8]] == 0.0)
+        n = len(p.positions)
+        assert cloud.GetNumberOfPoints() == n and cloud.GetNumberOfCells() == n
+        np.testing.assert_array_equal(vtk_to_numpy(cloud.GetPoints().GetData()),
+                                      np.pad(p.positions, ((0, 0), (0, 3 - ndim))))
+        data = cloud.GetPointData()
+        np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("pressure")), p.point_fields["pressure"])
+        np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("velocity")),
+                                      np.pad(p.point_fields["velocity"], ((0, 0), (0, 3 - ndim))))
+        np.testing.assert_array_equal(vtk_to_numpy(data.GetArray("stress")).reshape(n, 3, 3),
+                                      np.pad(p.point_fields["stress"], ((0, 0), (0, 3 - ndim), (0, 3 - ndim))))
+
+
+def test_coupled_2d_ensemble_series_varying_particle_count(tmp_path):
+    rng = np.random.default_rng(3)
+    origin, spacing, shape = (0.5, -1.0), (0.1, 0.2), (5, 3)
+    times, counts = [0.0, 2.5e-4, 1.0e-3], [(4, 6), (7, 1), (2, 9)]  # particles of (member 0, member 1)
+    out = results.prepare_directory(tmp_path / "out", overwrite=False)
+    written = [[], []]
+    for index, (t, per_member) in enumerate(zip(times, counts)):
+        members = [coupled_member(origin, spacing, shape, t, n, rng, offset=10.0 * k)
+                   for k, n in enumerate(per_member)]
+        results.write_snapshot(out, index, t, members)
+        for k, snap in enumerate(members):
+            written[k].append(snap)
+    for k in range(2):
+        results.write_series(out, k, list(enumerate(times)), written[k][-1])
+        check_coupled_series(out, written[k], times, k, offset=10.0 * k)
+    # one HDF5 file per member and snapshot, one XDMF per member
+    assert sorted(f.name for f in (out / "fields").iterdir()) == sorted(
+        [f"member{k}_{i:04d}.h5" for k in range(2) for i in range(3)] + ["member0.xdmf", "member1.xdmf"])
+    # the API's field dict: the grid's entries and the particles' prefixed particle_
+    snap = results.read_snapshot(out, "coupled", 1, 1)
+    f = snap.as_fields()
+    assert f.keys() == {"x", "y", "pressure", "velocity", "stress", "particle_x", "particle_y",
+                        "particle_pressure", "particle_velocity", "particle_stress"}
+    assert f["x"].shape == shape and f["velocity"].shape == shape + (2,) and f["particle_x"].shape == (1,)
+    np.testing.assert_array_equal(f["particle_y"], written[1][1].particles.positions[:, 1])
+    np.testing.assert_array_equal(f["particle_stress"], written[1][1].particles.point_fields["stress"])
+    np.testing.assert_array_equal(f["pressure"], written[1][1].grid.cell_fields["pressure"])
+
+
+def test_coupled_3d_series(tmp_path):
+    rng = np.random.default_rng(4)
+    origin, spacing, shape = (0.0, 1.0, -0.5), (0.25, 0.5, 0.125), (4, 3, 2)
+    times, counts = [1e-4, 3e-4], [5, 8]
+    out = results.prepare_directory(tmp_path / "out", overwrite=False)
+    written = [coupled_member(origin, spacing, shape, t, n, rng) for t, n in zip(times, counts)]
+    for index, (t, snap) in enumerate(zip(times, written)):
+        results.write_snapshot(out, index, t, [snap])
+    results.write_series(out, 0, list(enumerate(times)), written[-1])
+    check_coupled_series(out, written, times, 0)
+    assert set(written[0].as_fields()) >= {"z", "particle_z"}
+
+
+def test_coupled_snapshot_needs_particles_of_the_grid_dimension(tmp_path):
+    with pytest.raises(ValueError, match="positions must have the grid's 2 coordinates"):
+        write_coupled_snapshot(tmp_path / "a.h5", 0.0, (0.0, 0.0), 1.0, {"p": np.zeros((2, 2))}, np.zeros((3, 3)),
+                               {})

@@ -47,9 +47,9 @@ class Setup(Protocol):
 
 # ---------------------------------------------------------------------------------------------------------------
 # Snapshots: the mesh and fields of one member at one time, as written to fields/ and read back.
-# Each kind has a writer in blastfsi.io (results.py: polyline; fields.py: grid, particles) and converts itself
-# to the Python API's field dict with as_fields(): coordinates x (y, z) with the fields' shape, scalar fields
-# as they are, VECTOR_FIELDS with a trailing axis of length ndim.
+# Each kind has a writer in blastfsi.io (results.py: polyline; fields.py: grid, particles, coupled = grid plus
+# particles) and converts itself to the Python API's field dict with as_fields(): coordinates x (y, z) with the
+# fields' shape, scalar fields as they are, VECTOR_FIELDS with a trailing axis of length ndim.
 # ---------------------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Polyline:
@@ -110,7 +110,23 @@ class Particles:
                 **self.point_fields}
 
 
-Snapshot = Union[Polyline, Grid, Particles]
+@dataclass(frozen=True)
+class Coupled:
+    """An Eulerian grid and a particle cloud of the same member at the same time (cfdmp: grid + MPM).
+
+    ``as_fields``: the grid's ``as_fields`` entries, and every entry of the particles' ``as_fields``
+    prefixed ``particle_`` (``particle_x``, ``particle_pressure``, ...).
+    """
+
+    kind: ClassVar[str] = "coupled"
+    grid: Grid
+    particles: Particles
+
+    def as_fields(self) -> dict[str, np.ndarray]:
+        return {**self.grid.as_fields(), **{f"particle_{name}": v for name, v in self.particles.as_fields().items()}}
+
+
+Snapshot = Union[Polyline, Grid, Particles, Coupled]
 
 
 class Method(Protocol):

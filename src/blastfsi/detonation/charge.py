@@ -1,6 +1,10 @@
-"""The ``charge`` initial condition of the euler method: the 1D spherical
-detonation on ``lagrangian1d`` (through the same driver, nothing written) run to
-the remap time, remapped conservatively by :mod:`blastfsi.detonation.remap`.
+"""The ``charge`` initial condition of the euler method: the 1D detonation on
+``lagrangian1d`` (through the same driver, nothing written) run to the remap
+time, remapped conservatively by :mod:`blastfsi.detonation.remap`. The 1D run is
+spherical (j = 2) for 1D spherical, r-z and 3D Cartesian domains, and cylindrical
+(j = 1) for 2D Cartesian (plane x-y) domains, where the charge is an infinitely
+long cylinder along z: ``initial.mass`` is then per metre of its length [kg/m],
+and so is ``info["charge_mass"]``.
 
 Remap time: ``initial.remap_time``, or automatically the arrival time
 (threshold ``output.arrival_fraction`` p0) of the 1D blast at the limit radius
@@ -14,7 +18,11 @@ remap time whose disturbed ball already crosses a non-mirror face, or leaves the
 
 Hemisphere (a surface burst, KB "surface"): its centre lies on a wall/symmetry
 face; the 1D run is a sphere of twice the mass, of which the domain holds half.
+In 2D Cartesian, likewise a half cylinder lying on a wall/symmetry face.
 Simulated time 0 of the euler run is the remap time (``info["remap_time"]``).
+
+Kingery-Bulmash (``info["kb_burst"]``: "free-air" or "surface") holds for
+spherical TNT charges only; for a cylinder it is None (no KB comparison).
 """
 from __future__ import annotations
 
@@ -26,10 +34,11 @@ from blastfsi.detonation import remap as rm
 from blastfsi.euler.scenario import AXES
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
-from blastfsi.problems.detonation import EXPLOSIVES, charge_radius
+from blastfsi.problems.detonation import EXPLOSIVES, charge_mass, charge_radius
 from blastfsi.scenario import ScenarioError
 
 EULER_GEOMETRIES = ("spherical", "axisymmetric", "cartesian")
+GEOMETRY_1D = {1: "cylindrical", 2: "spherical"}  # lagrangian1d domain.geometry of exponent j
 
 
 class ChargeFields(NamedTuple):
@@ -100,12 +109,13 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
 
 
 def run_1d(explosive: str, radius: float, cells: int, length: float, t_end: float, gas: dict,
-           gauges: list | None = None, arrival_fraction: float = 0.01):
-    """The 1D spherical detonation on ``lagrangian1d`` to ``t_end`` (a :class:`blastfsi.simulation.Result`)."""
+           gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2):
+    """The 1D spherical (j = 2) or cylindrical (j = 1) detonation on ``lagrangian1d`` to ``t_end``
+    (a :class:`blastfsi.simulation.Result`)."""
     from blastfsi import simulation
 
     data = {"method": "lagrangian1d", "name": "charge-1d", "charge": {"explosive": explosive, "radius": radius},
-            "domain": {"geometry": "spherical", "length": length}, "grid": {"cells": cells},
+            "domain": {"geometry": GEOMETRY_1D[j], "length": length}, "grid": {"cells": cells},
             "gas": gas, "time": {"end": t_end},
             "output": {"history_samples": 2, "fields": 0, "plots": False, "gauges": gauges or [],
                        "arrival_fraction": arrival_fraction}}
@@ -115,9 +125,10 @@ def run_1d(explosive: str, radius: float, cells: int, length: float, t_end: floa
 def charge_initial(sc, g) -> ChargeFields:
     init = sc.initial
     d = sc.domain
-    if d.geometry not in EULER_GEOMETRIES or (d.geometry == "cartesian" and g.ndim != 3):
-        raise ScenarioError(f"initial.kind = 'charge' needs a spherical (1D), axisymmetric or 3D Cartesian domain, "
-                            f"got {d.geometry} in {g.ndim}D")
+    if d.geometry not in EULER_GEOMETRIES or (d.geometry == "cartesian" and g.ndim == 1):
+        raise ScenarioError(f"initial.kind = 'charge' needs a spherical (1D), axisymmetric, 2D Cartesian "
+                            f"(a cylindrical charge) or 3D Cartesian domain, got {d.geometry} in {g.ndim}D")
+    j = rm.ball_exponent(d.geometry, g.ndim)
     hx = _explosive(sc)
     air_name, air, rho_a, p_a = _ambient(sc)
     centre = np.asarray(init.center or [0.0] * g.ndim, float)
@@ -128,30 +139,30 @@ def charge_initial(sc, g) -> ChargeFields:
     hemi = init.shape == "hemisphere"
     if hemi and not any(abs(centre[ax] - (d.lower, d.upper)[k][ax]) <= 1e-9 * g.dx and mirrors[ax][k]
                         for ax in range(g.ndim) for k in (0, 1) if not (d.geometry != "cartesian" and ax == 0)):
-        raise ScenarioError("initial.shape = 'hemisphere' needs initial.center on a wall or symmetry face")
-    mass_sphere = None if init.mass is None else init.mass * (2.0 if hemi else 1.0)
-    radius = init.radius if init.radius is not None else charge_radius(mass_sphere, hx.density, 2)
-    mass_sphere = 4.0 / 3.0 * np.pi * hx.density * radius**3
+        raise ScenarioError("initial.shape = 'hemisphere' needs initial.center on a wall or symmetry face"
+                            + (" (in 2D Cartesian: a half cylinder lying on it)" if j == 1 else ""))
+    mass_full = None if init.mass is None else init.mass * (2.0 if hemi else 1.0)  # kg, or kg/m for j = 1
+    radius = init.radius if init.radius is not None else charge_radius(mass_full, hx.density, j)
+    mass_full = charge_mass(radius, hx.density, j)
     r_lim = limit_radius(sc, g, centre, mirrors, radius)
     gas = {"gamma": air.gamma, "pressure": p_a, "density": rho_a}
     length = 1.5 * r_lim + 10.0 * radius
     c0 = np.sqrt(air.gamma * p_a / rho_a)
     if init.remap_time is None:
         probe = run_1d(init.explosive, radius, init.cells, length, r_lim / c0 + radius / hx.detonation_velocity, gas,
-                       [r_lim], sc.output.arrival_fraction)
+                       [r_lim], sc.output.arrival_fraction, j)
         t_remap = probe.summary["gauges"][0]["arrival_time"]
         if t_remap is None:
             raise ScenarioError("initial.remap_time: the 1D blast never reached the limit radius "
                                 f"{r_lim:.4g} m; give the remap time")
     else:
         t_remap = init.remap_time
-    res = run_1d(init.explosive, radius, init.cells, length, t_remap, gas) if t_remap > 0.0 else None
-    if res is None:  # remap at lighting time: the unburnt charge (the "artificial detonation" of 000 Sec. 4.1)
-        res = run_1d(init.explosive, radius, init.cells, length, 1e-12, gas)
+    # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
+    res = run_1d(init.explosive, radius, init.cells, length, max(t_remap, 1e-12), gas, j=j)
     setup = res.setups[0]
     st = {k: np.asarray(v)[0] for k, v in res.state._asdict().items()}
     profile = rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], setup.explosive_zones,
-                                         setup.info["measure"])
+                                         setup.geometry)
     r_dist = rm.disturbed_radius(profile, rho_a, p_a / air.eos_params().omega)
     if r_dist >= 0.99 * length:
         raise ScenarioError(f"initial.remap_time = {t_remap:g} s: the blast has left the 1D domain by then")
@@ -162,10 +173,11 @@ def charge_initial(sc, g) -> ChargeFields:
     except rm.RemapError as err:
         raise ScenarioError(f"initial.remap_time = {t_remap:g} s: {err}") from None
     eos = np.array([list(hx.eos_params()), list(air.eos_params())], float)
-    kb_mass = mass_sphere * out.share if hemi else mass_sphere
+    mass = mass_full * out.share if hemi else mass_full
+    kb_burst = None if j == 1 else "surface" if hemi else "free-air"
     info = {"remap_time": float(t_remap), "remap_radius": float(r_dist), "limit_radius": float(r_lim),
-            "charge_radius": float(radius), "charge_mass": float(kb_mass), "charge_center": centre.tolist(),
-            "kb_burst": "surface" if hemi else "free-air", "one_d_zones": int(setup.cells),
+            "charge_radius": float(radius), "charge_mass": float(mass), "charge_center": centre.tolist(),
+            "kb_burst": kb_burst, "one_d_zones": int(setup.cells),
             "remap_share": out.share,
             "remap_mass_error": float(np.sum(out.mass) / out.targets[0] - 1.0),
             "remap_products_error": float(np.sum(out.products) / out.targets[1] - 1.0),

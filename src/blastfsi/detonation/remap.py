@@ -1,6 +1,11 @@
-"""Conservative remap of a 1D spherical detonation (``lagrangian1d``) onto an
-Eulerian grid (seed 000 Sec. 4.1: "solving a 1D TNT explosion problem first and
-map the result to the 3D region as the initial condition").
+"""Conservative remap of a 1D spherical or cylindrical detonation (``lagrangian1d``)
+onto an Eulerian grid (seed 000 Sec. 4.1: "solving a 1D TNT explosion problem first
+and map the result to the 3D region as the initial condition").
+
+Geometry exponent j: a sphere (j = 2) on 1D spherical, r-z and 3D Cartesian
+grids; an infinitely long cylinder (j = 1, amounts per metre of its length) on
+2D Cartesian (plane x-y) grids. The ball of radius r is then the sphere or the
+disc, of measure B_j r^(j+1) with B_2 = 4 pi / 3, B_1 = pi (:data:`UNIT_BALL`).
 
 1D profile (:func:`profile_from_lagrangian`): zone edges r, and per zone the
 physical mass, products mass, radial momentum and total energy. The node
@@ -12,17 +17,17 @@ Remap (:func:`remap`): zones are merged into radial bins at least one sub-cell
 diagonal wide, never across the products/air interface; beyond the disturbed
 radius r_max the ambient air is one more bin. Every grid cell is cut into
 n_sub^ndim sub-cells, each carrying its exact volume (sub-shells in 1D
-spherical, sub-rings in r-z, cubes in 3D) spread over the radial interval of
-its size around its centre's distance from the charge centre (in 1D spherical
-exactly its sub-shell) and shared between the bins that interval overlaps in
-proportion to their r^3 extent; each bin's
+spherical, sub-rings in r-z, squares in 2D, cubes in 3D) spread over the radial
+interval of its size around its centre's distance from the charge centre (in 1D
+spherical exactly its sub-shell) and shared between the bins that interval
+overlaps in proportion to their r^(j+1) extent (the measure of the shells); each bin's
 content is shared among its sub-cells in proportion to their volumes, scaled
 so that the bin's total on the grid equals its 1D total times the share f of
-the sphere inside the domain (1/2 per wall/symmetry plane through the centre).
+the ball inside the domain (1/2 per wall/symmetry plane through the centre).
 Mass, products mass, radial momentum and total energy are therefore
 conserved to round-off. Cells the ball cannot reach keep the ambient state
 exactly; in the cells it reaches, the ambient bin's target is the ambient state
-times their exact volume less f V_ball(r_max), so the sampling error of the
+times their exact volume less f B_j r_max^(j+1), so the sampling error of the
 ball's edge stays in those cells (a relative perturbation of the ambient
 there of the order of the sub-cell sampling error).
 
@@ -41,36 +46,53 @@ import numpy as np
 
 from blastfsi.eos import jwl
 from blastfsi.eos.jwl import JWLParams
+from blastfsi.problems.detonation import MEASURE
+
+UNIT_BALL = {1: np.pi, 2: 4.0 / 3.0 * np.pi}  # B_j = MEASURE[j] / (j + 1): unit disc, unit sphere
 
 
 class Profile1D(NamedTuple):
-    """A spherically symmetric state: zone edges and per-zone totals (physical, whole sphere)."""
+    """A spherically (j = 2) or cylindrically (j = 1) symmetric state: zone edges and per-zone totals
+    (physical: whole sphere; whole cylinder per metre of length)."""
 
     edges: np.ndarray  # (N+1,) [m]
-    mass: np.ndarray  # (N,) [kg]
+    mass: np.ndarray  # (N,) [kg] (j = 1: kg/m)
     products: np.ndarray  # (N,) products mass [kg]
     momentum: np.ndarray  # (N,) radial momentum [kg m/s]
     energy: np.ndarray  # (N,) total energy [J]
+    j: int = 2  # geometry exponent: 2 sphere, 1 cylinder
+
+
+def shell_measures(edges, j: int) -> np.ndarray:
+    """Measures B_j (r_{k+1}^(j+1) - r_k^(j+1)) of the shells between ``edges`` (volumes; areas per
+    metre of length for j = 1)."""
+    return UNIT_BALL[j] * np.diff(np.asarray(edges, float) ** (j + 1))
+
+
+def ball_exponent(geometry: str, ndim: int) -> int:
+    """j of the blast a grid holds: a cylinder (1) on a 2D Cartesian grid, a sphere (2) otherwise."""
+    return 1 if geometry == "cartesian" and ndim == 2 else 2
 
 
 class RemapError(ValueError):
     """A remap that cannot conserve: the disturbed ball crosses a boundary that is not a mirror plane."""
 
 
-def profile_from_lagrangian(x, v, e, zone_mass, explosive_zones: int, measure: float) -> Profile1D:
-    """The 1D profile of a ``lagrangian1d`` spherical state (``measure`` = 4 pi: per-steradian masses)."""
-    m = measure * np.asarray(zone_mass, float)
+def profile_from_lagrangian(x, v, e, zone_mass, explosive_zones: int, j: int) -> Profile1D:
+    """The 1D profile of a ``lagrangian1d`` spherical (j = 2) or cylindrical (j = 1) state, whose zone
+    masses are per radian^j (times MEASURE[j] = 4 pi, 2 pi: whole sphere, whole cylinder per metre)."""
+    m = MEASURE[j] * np.asarray(zone_mass, float)
     v = np.asarray(v, float)
     prod = np.where(np.arange(m.size) < explosive_zones, m, 0.0)
     mom = 0.5 * m * (v[:-1] + v[1:])
     kin = 0.25 * m * (v[:-1] ** 2 + v[1:] ** 2)
-    return Profile1D(np.asarray(x, float), m, prod, mom, m * np.asarray(e, float) + kin)
+    return Profile1D(np.asarray(x, float), m, prod, mom, m * np.asarray(e, float) + kin, j)
 
 
 def disturbed_radius(profile: Profile1D, ambient_density: float, ambient_pressure_energy: float,
                      rel: float = 1e-6) -> float:
     """Outer edge of the last zone whose density or energy density differs from ambient by > rel."""
-    vol = 4.0 / 3.0 * np.pi * np.diff(profile.edges**3)
+    vol = shell_measures(profile.edges, profile.j)
     rho = profile.mass / vol
     eden = profile.energy / vol
     off = (np.abs(rho / ambient_density - 1.0) > rel) | (np.abs(eden / ambient_pressure_energy - 1.0) > rel)
@@ -104,7 +126,8 @@ def _bins(profile: Profile1D, r_max: float, min_width: float):
 
 def _sub_samples(edges_axes, geometry: str, n_sub: int, cells_idx):
     """Sub-cell centres (S, ndim), exact sub-cell volumes (S,) and owning cell index (S,)
-    of the cells ``cells_idx`` (tuple of index arrays), each cut in n_sub per axis."""
+    of the cells ``cells_idx`` (tuple of index arrays), each cut in n_sub per axis (2D Cartesian:
+    areas, per metre of length)."""
     ndim = len(edges_axes)
     frac = (np.arange(n_sub) + 0.5) / n_sub
     lo_f = np.arange(n_sub) / n_sub
@@ -148,7 +171,7 @@ class Remapped(NamedTuple):
     velocity: np.ndarray  # (ndim, *shape)
     pressure: np.ndarray  # (*shape)
     volume: np.ndarray  # (*shape) cell volumes [m^3]
-    share: float  # f, fraction of the sphere inside the domain
+    share: float  # f, fraction of the ball (sphere or cylinder) inside the domain
     radius: float  # r_max, outer radius of the remapped (disturbed) ball [m]
     targets: tuple  # exact (mass, products mass, energy) the grid must hold
 
@@ -157,7 +180,7 @@ def cell_volumes(edges_axes, geometry: str) -> np.ndarray:
     """Exact cell volumes [m^3] (1D Cartesian: per m^2; 2D Cartesian: per m)."""
     d = [np.diff(e) for e in edges_axes]
     if geometry == "spherical":
-        first = 4.0 / 3.0 * np.pi * np.diff(edges_axes[0] ** 3)
+        first = shell_measures(edges_axes[0], 2)
     elif geometry == "axisymmetric":
         first = np.pi * np.diff(edges_axes[0] ** 2)
     else:
@@ -174,7 +197,8 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     """Remap ``profile`` (centred at ``centre``) onto the grid with cell edges ``edges_axes``.
 
     geometry: "spherical" (1D, r from 0, centre [0]), "axisymmetric" (r-z, centre [0, z_c]) or
-    "cartesian" (3D; 1D/2D Cartesian are not spherical blasts and are refused). ``mirrors``: per
+    "cartesian" (3D; 2D: a cylindrical ``profile`` (j = 1), its axis along z; 1D Cartesian is
+    refused). The profile's j must be the grid's (:func:`ball_exponent`). ``mirrors``: per
     axis (lower, upper) booleans, True where that face is a wall/symmetry plane; a mirror face
     through the centre halves the share f. The ball of radius ``r_max`` (default: the disturbed
     radius) must not cross any other face (RemapError)."""
@@ -184,8 +208,12 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
         raise RemapError("a 1D spherical grid holds a charge at r = 0 only")
     if geometry == "axisymmetric" and (ndim != 2 or centre[0] != 0.0):
         raise RemapError("an axisymmetric grid holds a spherical charge on its axis (r = 0) only")
-    if geometry == "cartesian" and ndim != 3:
-        raise RemapError("a spherical charge needs a 3D Cartesian, an axisymmetric or a 1D spherical grid")
+    if geometry == "cartesian" and ndim == 1:
+        raise RemapError("a 1D Cartesian grid holds neither a spherical nor a cylindrical charge")
+    j = ball_exponent(geometry, ndim)
+    if profile.j != j:
+        raise RemapError(f"a {('', 'cylindrical', 'spherical')[profile.j]} 1D profile cannot be remapped onto a "
+                         f"{ndim}D {geometry} grid, which holds a {('', 'cylindrical', 'spherical')[j]} blast")
     air_e = ambient_pressure / air_eos.omega  # rho e of the ambient ideal gas (f = 0)
     r_max = disturbed_radius(profile, ambient_density, air_e) if r_max is None else float(r_max)
     share = 1.0
@@ -207,7 +235,7 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     bin_edges, (b_mass, b_prod, b_mom, b_en), b_is_prod = _bins(profile, r_max, s * np.sqrt(ndim) * 1.0001)
     r_max = float(bin_edges[-1])
     nb = b_mass.size
-    ball = share * 4.0 / 3.0 * np.pi * r_max**3
+    ball = share * UNIT_BALL[j] * r_max ** (j + 1)
     vols = cell_volumes(edges_axes, geometry)
     # cells the ball can reach: nearest point of the cell within r_max
     near = np.ones(vols.shape, bool)
@@ -224,14 +252,15 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     rel = pts - centre[None, :]
     radius = np.sqrt(np.sum(rel**2, axis=1))
     # each sub-cell spreads over the radial interval [rho - s/2, rho + s/2] (in 1D spherical: its own
-    # sub-shell exactly), shared between the (at most two) bins it overlaps in proportion to r^3
+    # sub-shell exactly), shared between the (at most two) bins it overlaps in proportion to r^(j+1)
     lo = np.maximum(radius - 0.5 * s, 0.0)
     hi = radius + 0.5 * s
     bin_of = np.r_[bin_edges, np.inf]
     b_lo = np.minimum(np.searchsorted(bin_of, lo, side="right") - 1, nb)
     b_hi = np.minimum(np.searchsorted(bin_of, hi, side="right") - 1, nb)
     split = np.where(b_hi > b_lo, bin_of[np.minimum(b_lo + 1, nb)], hi)
-    f_lo = (split**3 - lo**3) / (hi**3 - lo**3)
+    q = j + 1
+    f_lo = (split**q - lo**q) / (hi**q - lo**q)
     b = np.r_[b_lo, b_hi]
     w = np.r_[svol * f_lo, svol * (1.0 - f_lo)]
     own = np.r_[owner, owner]
@@ -242,7 +271,7 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
         raise RemapError("a radial bin received no sub-cell (grid too coarse for the remap sampling)")
     v_near = float(np.sum(vols[near]))  # exact volume of the cells the ball reaches
     amb_vol = v_near - ball  # exact ambient volume inside those cells; the rest of the grid is ambient as is
-    scale_vol = np.r_[share * 4.0 / 3.0 * np.pi * np.diff(bin_edges**3), amb_vol] / W
+    scale_vol = np.r_[share * shell_measures(bin_edges, j), amb_vol] / W
     t_mass = np.r_[share * b_mass, ambient_density * amb_vol] / W
     t_prod = np.r_[share * b_prod, 0.0] / W
     t_mom = np.r_[share * b_mom, 0.0] / W
@@ -279,7 +308,7 @@ def _primitives(mass, products, momentum, energy, pvol, cvol, vols, share, ambie
     has_p = products > 0.0
     has_a = air_mass > 0.0
     prod_zones = profile.products > 0.0
-    prod_vol = 4.0 / 3.0 * np.pi * np.diff(profile.edges**3)
+    prod_vol = shell_measures(profile.edges, profile.j)
     fill_p = float(np.sum(profile.products) / np.sum(prod_vol[prod_zones]))  # mean products density
     rho_p = np.where(has_p & (alpha > 0.0), products / np.where(alpha > 0.0, alpha * vols, 1.0), fill_p)
     rho_a = np.where(has_a & (alpha < 1.0), air_mass / np.where(alpha < 1.0, (1.0 - alpha) * vols, 1.0),

@@ -6,8 +6,9 @@ HLLC-MUSCL; one or two materials (five-equation products/air model, ERRATA
 """
 from blastfsi.euler.config import (AXIS, CARTESIAN, CYLINDRICAL, HLLC_MUSCL, LAX_WENDROFF, OUTFLOW, PERIODIC,
                                    SPHERICAL, WALL, Config, Params, n_vars)
-from blastfsi.euler.step import conservative, first_bad_cell, primitives, stable_dt, step, total
+from blastfsi.euler.step import (conservative, first_bad_cell, primitives, stable_dt, step, step_with_transfers,
+                                 total)
 
-__all__ = ["Config", "Params", "n_vars", "conservative", "primitives", "stable_dt", "first_bad_cell", "step", "total",
-           "CARTESIAN", "CYLINDRICAL", "SPHERICAL", "OUTFLOW", "WALL", "AXIS", "PERIODIC", "LAX_WENDROFF",
-           "HLLC_MUSCL"]
+__all__ = ["Config", "Params", "n_vars", "conservative", "primitives", "stable_dt", "first_bad_cell", "step",
+           "step_with_transfers", "total", "CARTESIAN", "CYLINDRICAL", "SPHERICAL", "OUTFLOW", "WALL", "AXIS",
+           "PERIODIC", "LAX_WENDROFF", "HLLC_MUSCL"]

@@ -21,6 +21,12 @@
       w_L = (1 + sign s*)/2, w_R = 1 - w_L, s_L = min(S_L, 0), s_R = max(S_R, 0),
   which is also the form used for the partial densities (q = alpha_k rho_k).
 * Time: SSP-RK2 (Shu & Osher, J. Comput. Phys. 77, 1988): U1 = U + dt L(U), U^{n+1} = (U + U1 + dt L(U1)) / 2.
+* Face transfers (for conservative coupling): with L(U)_i = -(g+ F_{i+1/2} - g- F_{i-1/2})/dx + sources,
+  U^{n+1} = U + dt/2 (L(U) + L(U1)), so the amount of a row moved across face i+1/2 from cell i to
+  cell i+1 in one step is T = dt/dx (F(U) + F(U1))/2; it is accumulated like the state,
+  T1 = T0 + dt/dx F(U), T^{n+1} = (T0 + T1 + dt/dx F(U1))/2 with T0 = 0. The radial momentum's
+  pressure force and the products fraction's alpha div u term are cell sources: T of the
+  products fraction is its conservative part (the HLLC flux of alpha).
 """
 from __future__ import annotations
 
@@ -132,18 +138,20 @@ def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
     return hllc_flux(left, right, lay, axis)
 
 
-def rhs(rows, eos_r, cfg: Config, lay):
-    """Semi-discrete right-hand side L(U) of a tuple of conservative rows."""
+def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
+    """Semi-discrete right-hand side L(U) of a tuple of conservative rows; record (static): return
+    (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n."""
     nm, dtype = lay.n, rows[0].dtype
 
     st = cell_state(rows, eos_r, lay)
     cells = st.rho_k + st.velocity + (st.p,) + ((rows[lay.alpha],) if nm == 2 else ()) + (st.rho_e, st.c2)
     nw, p = len(cells) - 2, cells[nm + lay.ndim]
-    total = [0.0] * lay.nvar
+    total, fluxes = [0.0] * lay.nvar, []
     for axis in range(lay.ndim):
         n, nrm = cfg.shape[axis], lay.mom + axis
         padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
         flux, u_face = axis_flux(padded, nw, eos_r, cfg, lay, axis)
+        fluxes.append(flux)
         radial = axis == 0 and cfg.geometry != CARTESIAN
         if radial:
             gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
@@ -156,19 +164,37 @@ def rhs(rows, eos_r, cfg: Config, lay):
                 u_hi, u_lo = shift(u_face, axis, 1, n), shift(u_face, axis, 0, n)
                 div = div - rows[r] * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
             total[r] = total[r] - div / cfg.dx
-    return tuple(total)
+    return (tuple(total), tuple(fluxes)) if record else tuple(total)
 
 
-def step(U, dt, eos_r, cfg: Config, lay):
+def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     """SSP-RK2 (Shu & Osher 1988): U1 = U + dt L(U), U^{n+1} = U/2 + (U1 + dt L(U1))/2.
 
-    Both stages run in one fori_loop body (compiled once).
+    Both stages run in one fori_loop body (compiled once). moved: None, or per
+    axis a tuple of face-transfer rows (faces 0..n of that axis) onto which the
+    step's transfers (module docstring) are added; then (U_new, moved) is
+    returned. Static: the plain step carries no transfers. Recording runs each
+    stage exactly as the plain step does and recomputes its fluxes from the
+    same input behind an optimization barrier (see
+    blastfsi.euler.step.step_with_transfers for why).
     """
     a = jnp.asarray([0.0, 0.5], U.dtype)
     rows0 = tuple(U)
 
-    def stage(i, rows):
-        return tuple(a[i] * x0 + (1.0 - a[i]) * (x + dt * k)
-                     for x0, x, k in zip(rows0, rows, rhs(rows, eos_r, cfg, lay)))
+    def combine(i, start, now, rate):  # stage i, row by row: a_i start + (1 - a_i)(now + dt rate)
+        return tuple(a[i] * x0 + (1.0 - a[i]) * (x + dt * k) for x0, x, k in zip(start, now, rate))
 
-    return jnp.stack(jax.lax.fori_loop(0, 2, stage, rows0))
+    def plain(i, rows):
+        return combine(i, rows0, rows, rhs(rows, eos_r, cfg, lay))
+
+    if moved is None:
+        return jnp.stack(jax.lax.fori_loop(0, 2, plain, rows0))
+    moved0 = tuple(moved)
+
+    def stage(i, state):  # the transfers advance like the state, with L replaced by the face fluxes / dx
+        _, fluxes = rhs(jax.lax.optimization_barrier(state[0]), eos_r, cfg, lay, record=True)
+        return plain(i, state[0]), tuple(
+            combine(i, m0, m, tuple(f / cfg.dx for f in fl)) for m0, m, fl in zip(moved0, state[1], fluxes))
+
+    rows, moved = jax.lax.fori_loop(0, 2, stage, (rows0, moved0))
+    return jnp.stack(rows), moved

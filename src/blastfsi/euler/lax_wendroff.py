@@ -37,6 +37,17 @@ One directional operator L_a(dt) (:func:`sweep`) is
 
 Full step, 000 Eq. (6) with ERRATA 000-4: U^{n+1} = L_z L_y L_x L_x L_y L_z U^n,
 each operator with dt/2 (applied right to left; in 1D two x operators of dt/2).
+
+Face transfers (for conservative coupling): both stages of an operator are
+face differences, so the amount of a row moved across face i+1/2 from cell i
+to cell i+1 by one operator is
+
+    T_{i+1/2} = dt/dx F(U_{i+1/2}) - D_{i+1/2}
+
+(the cell below changes by -g+ T, the cell above by +g- T). The radial
+momentum's pressure force is a cell source, not a transfer; for the products
+fraction T is its conservative part (alpha u flux and viscous term), the
+alpha du/dx term is a cell source too.
 """
 from __future__ import annotations
 
@@ -56,9 +67,10 @@ def _fluxes(rows, p, un, lay, nrm):
     return tuple(x * un + (p if r == nrm else 0.0) + (p * un if r == lay.energy else 0.0) for r, x in enumerate(rows))
 
 
-def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int):
+def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False):
     """One directional operator L_axis(dt) on a tuple of conservative rows (module docstring);
-    c: sound speed of the state at the start of the full step."""
+    c: sound speed of the state at the start of the full step. record (static): also return
+    the face transfers T (rows at faces 0..n of the axis, module docstring)."""
     n, lam, nrm = cfg.shape[axis], dt / cfg.dx, lay.mom + axis
     dtype = rows[0].dtype
     radial = axis == 0 and cfg.geometry != CARTESIAN
@@ -75,9 +87,10 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int):
     k_face = 0.25 * (shift(k_cell, axis, 0, n + 1) + shift(k_cell, axis, 1, n + 1))  # 1/2 of the mean, faces 0..n
     if radial:
         gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
-    ubar = []
+    ubar, visc = [], []
     for x in q:
         d = k_face * (shift(x, axis, 2, n + 1) - shift(x, axis, 1, n + 1))
+        visc.append(d)
         d_hi, d_lo = shift(d, axis, 1, n), shift(d, axis, 0, n)
         ubar.append(shift(x, axis, 2, n) + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
     # the operator acts on U_bar with its own boundary values (one ghost cell each side: cells -1..n)
@@ -118,19 +131,42 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int):
             a_mid = 0.5 * (shift(half[r], axis, 0, n) + shift(half[r], axis, 1, n))
             new = new + lam * a_mid * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
         out.append(new)
+    if record:
+        return tuple(out), tuple(lam * fx - d for fx, d in zip(fh, visc))
     return tuple(out)
 
 
-def step(U, dt, eos_r, cfg: Config, lay):
+def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     """000 Eq. (6): L_z L_y L_x L_x L_y L_z, each operator with dt/2 (ERRATA 000-4).
 
     The six operators run in a fori_loop that switches between the ndim
-    directional bodies, so each body is compiled once.
+    directional bodies, so each body is compiled once. moved: None, or per
+    axis a tuple of face-transfer rows (faces 0..n of that axis) onto which
+    the transfers of the operators along that axis are summed; then
+    (U_new, moved) is returned. Static: the plain step carries no transfers.
+    Recording runs each operator exactly as the plain step does and recomputes
+    its transfers from the same input behind an optimization barrier (see
+    blastfsi.euler.step.step_with_transfers for why).
     """
     ndim = len(cfg.shape)
     order = jnp.asarray(tuple(reversed(range(ndim))) + tuple(range(ndim)))
     rows = tuple(U)
     c = jnp.sqrt(jnp.maximum(cell_state(rows, eos_r, lay).c2, 0.0))
-    branches = [lambda rows, a=a: sweep(rows, c, 0.5 * dt, eos_r, cfg, lay, a) for a in range(ndim)]
-    rows = jax.lax.fori_loop(0, 2 * ndim, lambda i, rows: jax.lax.switch(order[i], branches, rows), rows)
-    return jnp.stack(rows)
+
+    def body(a):  # the operator along axis a on the loop state
+        def plain(rows):
+            return sweep(rows, c, 0.5 * dt, eos_r, cfg, lay, a)
+
+        if moved is None:
+            return plain
+
+        def recording(state):  # the transfers of all axes are carried, those of axis a added to
+            rows, acc = state
+            _, t = sweep(*jax.lax.optimization_barrier((rows, c)), 0.5 * dt, eos_r, cfg, lay, a, record=True)
+            return plain(rows), acc[:a] + (tuple(m + x for m, x in zip(acc[a], t)),) + acc[a + 1:]
+        return recording
+
+    branches = [body(a) for a in range(ndim)]
+    state = jax.lax.fori_loop(0, 2 * ndim, lambda i, state: jax.lax.switch(order[i], branches, state),
+                              rows if moved is None else (rows, tuple(moved)))
+    return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])

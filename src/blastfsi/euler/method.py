@@ -188,12 +188,12 @@ class Euler:
             from blastfsi.detonation import kb_compare
 
             info = setup.info
-            r = kb_compare.distances(setup.gauges, info["charge_center"])
-            gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"])
+            if info["kb_burst"] is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
+                r = kb_compare.distances(setup.gauges, info["charge_center"])
+                gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"])
             out.update(charge_mass=info["charge_mass"], remap_time=t0)
         out["gauges"] = gauges
         return out
-
 
     def plots(self, folder, sc: EulerScenario, setups: list, histories: list[dict], members: list[dict],
               finals: list) -> None:
@@ -203,7 +203,7 @@ class Euler:
 
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
-            if sc.initial.kind == "charge":
+            if sc.initial.kind == "charge" and setups[0].info["kb_burst"] is not None:
                 from blastfsi.plotting.kb import kb_gauge_histories
 
                 info = setups[0].info

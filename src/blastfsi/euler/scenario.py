@@ -55,18 +55,22 @@ class PointEnergyInitial(Strict):
 
 
 class ChargeInitial(Strict):
-    """A high-explosive charge detonated on a fine 1D spherical Lagrangian grid (``lagrangian1d``, the
-    programmed burn of 000 Eqs. 52-53) up to the remap time, then remapped conservatively onto this grid
-    (:mod:`blastfsi.detonation.remap`, seed 000 Sec. 4.1). Simulated time 0 is the remap time."""
+    """A high-explosive charge detonated on a fine 1D Lagrangian grid (``lagrangian1d``, the programmed
+    burn of 000 Eqs. 52-53) up to the remap time, then remapped conservatively onto this grid
+    (:mod:`blastfsi.detonation.remap`, seed 000 Sec. 4.1). A sphere (1D spherical run) on 1D spherical,
+    axisymmetric and 3D Cartesian domains; on a 2D Cartesian domain an infinitely long cylinder along z
+    (1D cylindrical run). Simulated time 0 is the remap time."""
 
     kind: Literal["charge"]
     explosive: str = Field("tnt", min_length=1, description="explosive from the material library (JWL)")
-    mass: Optional[float] = Field(None, gt=0.0, le=1e6, description="charge mass [kg] (of the hemisphere for "
-                                                                    "shape = 'hemisphere')")
-    radius: Optional[float] = Field(None, gt=0.0, le=100.0, description="charge radius [m]")
+    mass: Optional[float] = Field(None, gt=0.0, le=1e6, description=(
+        "charge mass [kg] (of the hemisphere for shape = 'hemisphere'); on a 2D Cartesian domain the mass "
+        "per metre of the cylinder's length [kg/m] (of the half cylinder for shape = 'hemisphere')"))
+    radius: Optional[float] = Field(None, gt=0.0, le=100.0, description=(
+        "charge radius [m] (of the sphere; of the cylinder on a 2D Cartesian domain)"))
     shape: Literal["sphere", "hemisphere"] = Field("sphere", description=(
         "'hemisphere': centred on a wall/symmetry face (a surface burst); modelled as half of a sphere of "
-        "twice the mass"))
+        "twice the mass (on a 2D Cartesian domain: half of a cylinder lying on the face)"))
     center: list[float] = Field(default_factory=list, description="charge centre [m]; default the origin")
     ambient: Optional[GasState] = Field(None, description="ambient gas at rest; default the library's air")
     remap_time: Optional[float] = Field(None, ge=0.0, description=(

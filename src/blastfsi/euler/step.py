@@ -1,4 +1,5 @@
-"""Public kernels of the Eulerian solver: state conversion, time step, fault check, step, integrals.
+"""Public kernels of the Eulerian solver: state conversion, time step, fault check, step (optionally
+with its face transfers), integrals.
 
 All functions are pure and jittable with ``cfg`` static; ``params`` is traced
 (vmappable). The state ``U`` is an array (nvar, *shape) in the row layout of
@@ -96,12 +97,52 @@ def first_bad_cell(U, params: Params, cfg: Config):
     return jnp.where(jnp.any(flat), jnp.argmax(flat), -1)
 
 
+def _kernel(cfg: Config):
+    return lax_wendroff.step if cfg.scheme == LAX_WENDROFF else hllc.step
+
+
 def step(U, dt, params: Params, cfg: Config):
     """One full time step of length dt with the scheme of cfg.scheme."""
     lay, eos_r = _setup(U, params, cfg)
-    dt = jnp.asarray(dt, U.dtype)
-    kernel = lax_wendroff.step if cfg.scheme == LAX_WENDROFF else hllc.step
-    return kernel(U, dt, eos_r, cfg, lay)
+    return _kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay)
+
+
+def face_shape(cfg: Config, axis: int) -> tuple:
+    """Shape of the faces of one axis: cfg.shape with shape[axis] + 1 (face f between cells f-1 and f)."""
+    return tuple(m + (d == axis) for d, m in enumerate(cfg.shape))
+
+
+def step_with_transfers(U, dt, params: Params, cfg: Config):
+    """(U_new, transfers): U_new bit-identical to step(U, dt, params, cfg) and the amounts each face passed.
+
+    transfers: one array per axis a, of shape (nvar, *face_shape(cfg, a)). T[r, ..., f, ...] is the
+    amount of row r moved across face f of axis a (between cells f-1 and f) from the low to the
+    high side during the step, as a row-r density (content per unit cell volume) with the
+    geometric factors removed: the cell below the face changes by -g+ T, the cell above by +g- T
+    (g+- = geometry.flux_factors on the radial axis of a cylindrical/spherical grid, 1 elsewhere).
+    For every row but the products fraction (and, off Cartesian grids, the radial momentum, which
+    also feels the pressure force p (A+ - A-)/V) a cell's change is exactly (to round-off) the sum
+    of these face terms. The physical content through a face is T dx times its area: dx^(ndim-1)
+    (Cartesian), 2 pi r_f dx^(ndim-1) or 4 pi r_f^2 (radial faces, cylindrical or spherical; per
+    unit length in 1D cylindrical), pi (r+^2 - r-^2) (axial faces of an r-z grid), consistent
+    with geometry.cell_volumes (V_i g+-_i = A_{i+-1/2} dx, geometry.py). The products-fraction
+    row holds its conservative part (the flux of alpha u, with Lax-Wendroff's viscous term); its
+    alpha div u term is a cell source. Schemes: lax_wendroff.py and hllc.py (module docstrings).
+
+    Cost about twice a plain step: XLA:CPU contracts a*b + c into fused multiply-adds depending on
+    how it fuses operations, so reading the transfers off the update's own intermediates changed
+    the last bits of U_new (1 ulp, in 5 of the 10 configurations of tests/test_euler_transfers.py;
+    bit-identical in all 10 with FMA disabled, XLA_FLAGS=--xla_cpu_max_isa=SSE4_2). The kernels
+    therefore run the plain update unchanged and recompute the transfers from the same input
+    behind jax.lax.optimization_barrier (no fusion or common-subexpression sharing with the
+    update); they balance U_new to round-off. Bit-identity holds between step and
+    step_with_transfers compiled alike (e.g. each jitted on its own); a step traced inside a
+    different enclosing computation may differ in its last bits.
+    """
+    lay, eos_r = _setup(U, params, cfg)
+    zeros = tuple((jnp.zeros(face_shape(cfg, a), U.dtype),) * lay.nvar for a in range(lay.ndim))
+    U_new, moved = _kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay, zeros)
+    return U_new, tuple(jnp.stack(m) for m in moved)
 
 
 def total(U, cfg: Config):

@@ -24,6 +24,10 @@ Conventions, all checked by ``tests/test_io_fields.py`` with ``vtkXdmfReader``:
   symmetric order (xx, yy, zz, xy, yz, xz) disagree; 9 components are read the same way everywhere.
 - Particles are an XDMF ``Polyvertex`` topology with node-centred data; coordinates are padded to 3 with
   zeros. A snapshot needs at least one particle: ``vtkXdmfReader`` fails on an empty geometry.
+- Grid + particles (a coupled Eulerian-MPM run): ONE HDF5 file per snapshot with a group ``grid`` laid out
+  as a grid file and a group ``particles`` laid out as a particle file (one file, so a snapshot is written
+  or missing as a whole), and one temporal collection whose every step is a ``Spatial`` collection of the
+  two Uniform grids; the reader gives a multiblock dataset of two blocks (grid, particles) per time.
 
 Each snapshot file also records, as attributes, what is needed to undo the padding (``read_*_snapshot``).
 """
@@ -41,6 +45,7 @@ KIND_COMPONENTS = {"scalar": 1, "vector": 3, "tensor": 9}  # components stored o
 _DTYPES = {4: np.float32, 8: np.float64}  # XDMF Precision (bytes) -> stored dtype
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 COORDINATES = "coordinates"  # particle-snapshot dataset holding the (n, 3) positions
+GRID_GROUP, PARTICLES_GROUP = "grid", "particles"  # the two HDF5 groups of a coupled snapshot (and XDMF grid names)
 
 
 class GridSnapshot(NamedTuple):
@@ -54,6 +59,12 @@ class ParticleSnapshot(NamedTuple):
     time: float
     positions: np.ndarray
     fields: dict[str, np.ndarray]
+
+
+class CoupledSnapshot(NamedTuple):
+    time: float
+    grid: GridSnapshot
+    particles: ParticleSnapshot
 
 
 # --------------------------------------------------------------------------------------------------- checks
@@ -162,21 +173,36 @@ def _data_item(dims, reference: str, precision: int) -> str:
             f'Precision="{precision}" Format="HDF">{reference}</DataItem>')
 
 
-def _attributes(h5_name: str, field_kinds: Mapping[str, str], lead_dims, center: str, precision: int) -> str:
+def _h5_location(h5_name, group: str = "") -> str:
+    """``file.h5:`` (datasets at the root) or ``file.h5:/group``: a dataset ``name`` is at ``<location>/name``."""
+    return f"{_xml_file_name(h5_name)}:" + (f"/{group}" if group else "")
+
+
+def _attributes(location: str, field_kinds: Mapping[str, str], lead_dims, center: str, precision: int) -> str:
     parts = []
     for name, kind in field_kinds.items():
         width = KIND_COMPONENTS[kind]
         dims = tuple(lead_dims) + ((width,) if width > 1 else ())
         parts.append(f'<Attribute Name="{name}" AttributeType="{kind.capitalize()}" Center="{center}">'
-                     f'{_data_item(dims, f"{h5_name}:/{name}", precision)}</Attribute>')
+                     f'{_data_item(dims, f"{location}/{name}", precision)}</Attribute>')
     return "".join(parts)
+
+
+def _time_element(time) -> str:
+    return f'<Time Value="{float(time)!r}"/>'
+
+
+def _uniform(name: str, body: str, time=None) -> str:
+    """An XDMF Uniform grid; ``time`` None leaves the time to the enclosing collection."""
+    return f'<Grid Name="{name}" GridType="Uniform">{"" if time is None else _time_element(time)}{body}</Grid>'
 
 
 def _write_collection(xdmf_path: Path, grids: list[str]) -> None:
     """Write the temporal collection atomically (ParaView may be reading the previous one)."""
     xdmf_path = Path(xdmf_path)
+    steps = "".join(f"{grid}\n" for grid in grids)
     text = ('<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain><Grid Name="series" GridType="Collection" '
-            f'CollectionType="Temporal">\n{"".join(grids)}</Grid></Domain></Xdmf>\n')
+            f'CollectionType="Temporal">\n{steps}</Grid></Domain></Xdmf>\n')
     tmp = xdmf_path.with_name(xdmf_path.name + ".tmp")
     tmp.write_text(text)
     tmp.replace(xdmf_path)
@@ -186,15 +212,50 @@ def _xml_file_name(name) -> str:
     return str(name).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
 
 
-# ------------------------------------------------------------------------------------------------ grids
-def write_grid_snapshot(h5_path, time, origin, spacing, fields: Mapping[str, np.ndarray], *,
-                        precision: int = 8) -> dict[str, str]:
-    """Write cell-centred fields of a uniform grid (1D, 2D or 3D) to one HDF5 file.
+class _GridLayout(NamedTuple):
+    """What every step of a grid series shares: cell counts (z, y, x) and the topology + geometry XML."""
+    cells_zyx: tuple[int, int, int]
+    mesh: str
 
-    ``origin`` is the lower corner (x[, y[, z]]), ``spacing`` the cell size (one, or one per axis). Each
-    field is indexed ``[i(, j(, k))]`` = (x, y, z) with an optional value shape (d,) or (d, d), d = ndim or 3.
-    Returns ``{name: kind}`` for :func:`write_grid_series`.
-    """
+
+def _grid_layout(shape: Sequence[int], origin, spacing) -> _GridLayout:
+    """Validated uniform-grid mesh of ``shape`` cells (x[, y[, z]]) as a 3DCoRectMesh (see the module notes)."""
+    origin, spacing = grid_geometry(origin, spacing)
+    ndim = origin.size
+    shape = tuple(int(n) for n in shape)
+    if len(shape) != ndim or min(shape) < 1:
+        raise ValueError(f"shape must give >= 1 cell along each of the {ndim} axes of origin, got {shape}")
+    cells_zyx = (1,) * (3 - ndim) + shape[::-1]
+    origin_zyx = np.concatenate([np.zeros(3 - ndim), origin[::-1]])
+    spacing_zyx = np.concatenate([np.full(3 - ndim, spacing[0]), spacing[::-1]])
+    geometry = "".join(f'<DataItem Dimensions="3" NumberType="Float" Precision="8" Format="XML">'
+                       f'{" ".join(repr(float(v)) for v in values)}</DataItem>' for values in (origin_zyx, spacing_zyx))
+    mesh = (f'<Topology TopologyType="3DCoRectMesh" Dimensions="{" ".join(str(n + 1) for n in cells_zyx)}"/>'
+            f'<Geometry GeometryType="ORIGIN_DXDYDZ">{geometry}</Geometry>')
+    return _GridLayout(cells_zyx, mesh)
+
+
+def _grid_body(location: str, layout: _GridLayout, field_kinds: Mapping[str, str], precision: int) -> str:
+    return layout.mesh + _attributes(location, field_kinds, layout.cells_zyx, "Cell", precision)
+
+
+def _particle_count(h5_name, count) -> int:
+    count = int(count)
+    if count < 1:
+        raise ValueError(f"snapshot {h5_name!r} must hold >= 1 particle, got {count}")
+    return count
+
+
+def _particle_body(location: str, count: int, field_kinds: Mapping[str, str], precision: int) -> str:
+    return (f'<Topology TopologyType="Polyvertex" NodesPerElement="1" NumberOfElements="{count}"/>'
+            f'<Geometry GeometryType="XYZ">{_data_item((count, 3), f"{location}/{COORDINATES}", precision)}'
+            f'</Geometry>{_attributes(location, field_kinds, (count,), "Node", precision)}')
+
+
+# ------------------------------------------------------------------------------------------------ grids
+def _write_grid(group: h5py.Group, time, origin, spacing, fields: Mapping[str, np.ndarray],
+                precision: int) -> dict[str, str]:
+    """The grid datasets and attributes of :func:`write_grid_snapshot` into an open HDF5 group."""
     origin, spacing = grid_geometry(origin, spacing)
     ndim = origin.size
     dtype = _dtype(precision)
@@ -206,24 +267,39 @@ def write_grid_snapshot(h5_path, time, origin, spacing, fields: Mapping[str, np.
     if len(shape) != ndim or min(shape) < 1:
         raise ValueError(f"fields of a {ndim}D grid need {ndim} spatial axes with >= 1 cell, got shape {shape}")
     kinds = {}
-    with h5py.File(h5_path, "w") as f:
-        f.attrs.update(time=_time(time), origin=origin, spacing=spacing, shape=np.array(shape))
-        for name, array in arrays.items():
-            kind, padded, value_shape = _padded(name, array, shape, ndim)
-            ds = f.create_dataset(name, data=_to_xdmf_order(padded.astype(dtype), ndim))
-            ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
-            kinds[name] = kind
+    group.attrs.update(time=_time(time), origin=origin, spacing=spacing, shape=np.array(shape))
+    for name, array in arrays.items():
+        kind, padded, value_shape = _padded(name, array, shape, ndim)
+        ds = group.create_dataset(name, data=_to_xdmf_order(padded.astype(dtype), ndim))
+        ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
+        kinds[name] = kind
     return kinds
+
+
+def _read_grid(group: h5py.Group) -> GridSnapshot:
+    origin, spacing = np.array(group.attrs["origin"]), np.array(group.attrs["spacing"])
+    ndim = origin.size
+    fields = {name: _unpadded(_from_xdmf_order(ds[()], ndim), ndim, tuple(ds.attrs["value_shape"]))
+              for name, ds in group.items()}
+    return GridSnapshot(float(group.attrs["time"]), origin, spacing, fields)
+
+
+def write_grid_snapshot(h5_path, time, origin, spacing, fields: Mapping[str, np.ndarray], *,
+                        precision: int = 8) -> dict[str, str]:
+    """Write cell-centred fields of a uniform grid (1D, 2D or 3D) to one HDF5 file.
+
+    ``origin`` is the lower corner (x[, y[, z]]), ``spacing`` the cell size (one, or one per axis). Each
+    field is indexed ``[i(, j(, k))]`` = (x, y, z) with an optional value shape (d,) or (d, d), d = ndim or 3.
+    Returns ``{name: kind}`` for :func:`write_grid_series`.
+    """
+    with h5py.File(h5_path, "w") as f:
+        return _write_grid(f, time, origin, spacing, fields, precision)
 
 
 def read_grid_snapshot(h5_path) -> GridSnapshot:
     """Read a file of :func:`write_grid_snapshot` back into arrays indexed (x, y, z) as they were given."""
     with h5py.File(h5_path, "r") as f:
-        origin, spacing = np.array(f.attrs["origin"]), np.array(f.attrs["spacing"])
-        ndim = origin.size
-        fields = {name: _unpadded(_from_xdmf_order(ds[()], ndim), ndim, tuple(ds.attrs["value_shape"]))
-                  for name, ds in f.items()}
-        return GridSnapshot(float(f.attrs["time"]), origin, spacing, fields)
+        return _read_grid(f)
 
 
 def write_grid_series(xdmf_path, snapshots: Sequence[tuple[str, float]], shape: Sequence[int], origin, spacing,
@@ -233,38 +309,19 @@ def write_grid_series(xdmf_path, snapshots: Sequence[tuple[str, float]], shape: 
     ``field_kinds`` maps each field name to "scalar", "vector" or "tensor" (what
     :func:`write_grid_snapshot` returns); ``shape`` is the number of cells along x[, y[, z]].
     """
-    origin, spacing = grid_geometry(origin, spacing)
-    ndim = origin.size
-    shape = tuple(int(n) for n in shape)
-    if len(shape) != ndim or min(shape) < 1:
-        raise ValueError(f"shape must give >= 1 cell along each of the {ndim} axes of origin, got {shape}")
+    layout = _grid_layout(shape, origin, spacing)
     _dtype(precision)
     _check_kinds(field_kinds)
     _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time"))
-    cells_zyx = (1,) * (3 - ndim) + shape[::-1]
-    origin_zyx = np.concatenate([np.zeros(3 - ndim), origin[::-1]])
-    spacing_zyx = np.concatenate([np.full(3 - ndim, spacing[0]), spacing[::-1]])
-    geometry = "".join(f'<DataItem Dimensions="3" NumberType="Float" Precision="8" Format="XML">'
-                       f'{" ".join(repr(float(v)) for v in values)}</DataItem>' for values in (origin_zyx, spacing_zyx))
-    grids = []
-    for index, (h5_name, time) in enumerate(snapshots):
-        grids.append(
-            f'<Grid Name="step{index}" GridType="Uniform"><Time Value="{float(time)!r}"/>'
-            f'<Topology TopologyType="3DCoRectMesh" Dimensions="{" ".join(str(n + 1) for n in cells_zyx)}"/>'
-            f'<Geometry GeometryType="ORIGIN_DXDYDZ">{geometry}</Geometry>'
-            f'{_attributes(_xml_file_name(h5_name), field_kinds, cells_zyx, "Cell", precision)}</Grid>\n')
-    _write_collection(xdmf_path, grids)
+    _write_collection(xdmf_path, [_uniform(f"step{index}", _grid_body(_h5_location(h5_name), layout, field_kinds,
+                                                                       precision), time)
+                                  for index, (h5_name, time) in enumerate(snapshots)])
 
 
 # -------------------------------------------------------------------------------------------- particles
-def write_particle_snapshot(h5_path, time, positions, fields: Mapping[str, np.ndarray], *, active=None,
-                            precision: int = 8) -> dict[str, str]:
-    """Write particles (positions (n, ndim), ndim 1..3) and their data to one HDF5 file.
-
-    Fields are (n,) scalars, (n, d) vectors or (n, d, d) tensors, d = ndim or 3. ``active`` (bool (n,)) keeps
-    only the active entries of a fixed-capacity pool. Returns ``{name: kind}`` for
-    :func:`write_particle_series`; the number of particles written is ``active.sum()`` (or n).
-    """
+def _write_particles(group: h5py.Group, time, positions, fields: Mapping[str, np.ndarray], active,
+                     precision: int) -> dict[str, str]:
+    """The particle datasets and attributes of :func:`write_particle_snapshot` into an open HDF5 group."""
     dtype = _dtype(precision)
     positions = np.asarray(positions)
     if positions.ndim != 2 or not 1 <= positions.shape[1] <= 3:
@@ -279,24 +336,47 @@ def write_particle_snapshot(h5_path, time, positions, fields: Mapping[str, np.nd
                          "on an empty geometry, so skip this snapshot")
     _check_names(fields, reserved=(COORDINATES,))
     kinds = {}
-    with h5py.File(h5_path, "w") as f:
-        f.attrs.update(time=_time(time), n_points=count, ndim=ndim)
-        f.create_dataset(COORDINATES, data=np.pad(positions[keep], ((0, 0), (0, 3 - ndim))).astype(dtype))
-        for name, array in fields.items():
-            kind, padded, value_shape = _padded(name, np.asarray(array), (n,), ndim)
-            ds = f.create_dataset(name, data=padded[keep].astype(dtype))
-            ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
-            kinds[name] = kind
+    group.attrs.update(time=_time(time), n_points=count, ndim=ndim)
+    group.create_dataset(COORDINATES, data=np.pad(positions[keep], ((0, 0), (0, 3 - ndim))).astype(dtype))
+    for name, array in fields.items():
+        kind, padded, value_shape = _padded(name, np.asarray(array), (n,), ndim)
+        ds = group.create_dataset(name, data=padded[keep].astype(dtype))
+        ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
+        kinds[name] = kind
     return kinds
+
+
+def _read_particles(group: h5py.Group) -> ParticleSnapshot:
+    ndim = int(group.attrs["ndim"])
+    fields = {name: _unpadded(ds[()], 1, tuple(ds.attrs["value_shape"]))
+              for name, ds in group.items() if name != COORDINATES}
+    return ParticleSnapshot(float(group.attrs["time"]), group[COORDINATES][:, :ndim], fields)
+
+
+def write_particle_snapshot(h5_path, time, positions, fields: Mapping[str, np.ndarray], *, active=None,
+                            precision: int = 8) -> dict[str, str]:
+    """Write particles (positions (n, ndim), ndim 1..3) and their data to one HDF5 file.
+
+    Fields are (n,) scalars, (n, d) vectors or (n, d, d) tensors, d = ndim or 3. ``active`` (bool (n,)) keeps
+    only the active entries of a fixed-capacity pool. Returns ``{name: kind}`` for
+    :func:`write_particle_series`; the number of particles written is ``active.sum()`` (or n),
+    :func:`particle_count`.
+    """
+    with h5py.File(h5_path, "w") as f:
+        return _write_particles(f, time, positions, fields, active, precision)
 
 
 def read_particle_snapshot(h5_path) -> ParticleSnapshot:
     """Read a file of :func:`write_particle_snapshot` back: positions (n, ndim) and fields as given."""
     with h5py.File(h5_path, "r") as f:
-        ndim = int(f.attrs["ndim"])
-        fields = {name: _unpadded(ds[()], 1, tuple(ds.attrs["value_shape"]))
-                  for name, ds in f.items() if name != COORDINATES}
-        return ParticleSnapshot(float(f.attrs["time"]), f[COORDINATES][:, :ndim], fields)
+        return _read_particles(f)
+
+
+def particle_count(h5_path, group: str = "") -> int:
+    """Number of particles in a file of :func:`write_particle_snapshot` (``group`` "") or of
+    :func:`write_coupled_snapshot` (``group`` :data:`PARTICLES_GROUP`)."""
+    with h5py.File(h5_path, "r") as f:
+        return int(f[group or "/"].attrs["n_points"])
 
 
 def write_particle_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]], field_kinds: Mapping[str, str],
@@ -306,15 +386,57 @@ def write_particle_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]]
     _dtype(precision)
     _check_kinds(field_kinds, reserved=(COORDINATES,))
     _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time", "particles"))
-    grids = []
+    _write_collection(xdmf_path, [_uniform(f"step{index}", _particle_body(_h5_location(h5_name),
+                                                                           _particle_count(h5_name, count),
+                                                                           field_kinds, precision), time)
+                                  for index, (h5_name, time, count) in enumerate(snapshots)])
+
+
+# ----------------------------------------------------------------------------------- grid + particles
+def write_coupled_snapshot(h5_path, time, origin, spacing, grid_fields: Mapping[str, np.ndarray], positions,
+                           particle_fields: Mapping[str, np.ndarray], *, active=None,
+                           precision: int = 8) -> tuple[dict[str, str], dict[str, str]]:
+    """Write a uniform grid and a particle cloud of the same dimension to one HDF5 file: the group
+    :data:`GRID_GROUP` as :func:`write_grid_snapshot` writes a file, the group :data:`PARTICLES_GROUP` as
+    :func:`write_particle_snapshot` does (arguments as there), and the attribute ``time`` at the root.
+    Returns the ``{name: kind}`` of the grid fields and of the particle fields for :func:`write_coupled_series`.
+    """
+    ndim, particle_ndim = np.atleast_1d(origin).size, np.shape(positions)[-1]
+    if particle_ndim != ndim:
+        raise ValueError(f"positions must have the grid's {ndim} coordinates per particle, got {particle_ndim}")
+    with h5py.File(h5_path, "w") as f:
+        f.attrs["time"] = _time(time)
+        grid_kinds = _write_grid(f.create_group(GRID_GROUP), time, origin, spacing, grid_fields, precision)
+        particle_kinds = _write_particles(f.create_group(PARTICLES_GROUP), time, positions, particle_fields, active,
+                                          precision)
+    return grid_kinds, particle_kinds
+
+
+def read_coupled_snapshot(h5_path) -> CoupledSnapshot:
+    """Read a file of :func:`write_coupled_snapshot` back (as :func:`read_grid_snapshot` and
+    :func:`read_particle_snapshot` do)."""
+    with h5py.File(h5_path, "r") as f:
+        return CoupledSnapshot(float(f.attrs["time"]), _read_grid(f[GRID_GROUP]), _read_particles(f[PARTICLES_GROUP]))
+
+
+def write_coupled_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]], shape: Sequence[int], origin,
+                         spacing, grid_kinds: Mapping[str, str], particle_kinds: Mapping[str, str], *,
+                         precision: int = 8) -> None:
+    """XDMF temporal collection over files of :func:`write_coupled_snapshot`, each time step a Spatial collection
+    of the grid (named "grid", as in :func:`write_grid_series`) and the particles (named "particles", as in
+    :func:`write_particle_series`). ``snapshots`` = [(h5 file relative to the XDMF, time, number of particles
+    in it)]; ``shape``, ``origin``, ``spacing`` describe the grid; the kinds are what the snapshot writer returns.
+    """
+    layout = _grid_layout(shape, origin, spacing)
+    _dtype(precision)
+    _check_kinds(grid_kinds)
+    _check_kinds(particle_kinds, reserved=(COORDINATES,))
+    _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time", "particles"))
+    steps = []
     for index, (h5_name, time, count) in enumerate(snapshots):
-        count = int(count)
-        if count < 1:
-            raise ValueError(f"snapshot {h5_name!r} must hold >= 1 particle, got {count}")
-        h5_name = _xml_file_name(h5_name)
-        grids.append(
-            f'<Grid Name="step{index}" GridType="Uniform"><Time Value="{float(time)!r}"/>'
-            f'<Topology TopologyType="Polyvertex" NodesPerElement="1" NumberOfElements="{count}"/>'
-            f'<Geometry GeometryType="XYZ">{_data_item((count, 3), f"{h5_name}:/{COORDINATES}", precision)}'
-            f'</Geometry>{_attributes(h5_name, field_kinds, (count,), "Node", precision)}</Grid>\n')
-    _write_collection(xdmf_path, grids)
+        grid = _uniform(GRID_GROUP, _grid_body(_h5_location(h5_name, GRID_GROUP), layout, grid_kinds, precision))
+        cloud = _uniform(PARTICLES_GROUP, _particle_body(_h5_location(h5_name, PARTICLES_GROUP),
+                                                         _particle_count(h5_name, count), particle_kinds, precision))
+        steps.append(f'<Grid Name="step{index}" GridType="Collection" CollectionType="Spatial">'
+                     f'{_time_element(time)}{grid}{cloud}</Grid>')
+    _write_collection(xdmf_path, steps)

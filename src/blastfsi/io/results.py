@@ -7,7 +7,8 @@ Layout::
     history.csv                (history_member<k>.csv for ensembles) SI units in the header
     fields/                    field snapshots, one FieldWriter per snapshot kind; open member<k>.xdmf
                                in ParaView (a time series). 1D meshes: snap_<i>.h5 (one group per member);
-                               grids and particles (blastfsi.io.fields): member<k>_<i>.h5
+                               grids, particles, and grid + particles in one file (coupled; groups grid,
+                               particles) (blastfsi.io.fields): member<k>_<i>.h5
     checkpoints/ckpt_<i>.h5    full solver state, for --restart
     plots/*.png
 """
@@ -24,7 +25,7 @@ import numpy as np
 import tomli_w
 
 from blastfsi.io import fields
-from blastfsi.method import Grid, Particles, Polyline
+from blastfsi.method import Coupled, Grid, Particles, Polyline
 
 
 class OutputError(RuntimeError):
@@ -164,6 +165,22 @@ def _value_kinds(arrays: dict, lead: int) -> dict[str, str]:
     return {n: ("scalar", "vector", "tensor")[np.ndim(a) - lead] for n, a in arrays.items()}
 
 
+def _grid_series_args(grid: Grid) -> tuple[list[int], list[float], list[float], dict[str, str]]:
+    """(cells per axis, origin, spacing, {field: kind}) of a uniform grid snapshot."""
+    shape = [len(e) - 1 for e in grid.edges]
+    return (shape, *_uniform(grid.edges), _value_kinds(grid.cell_fields, len(shape)))
+
+
+def _grid(snap: fields.GridSnapshot) -> Grid:
+    shape = np.shape(next(iter(snap.fields.values())))[:snap.origin.size]
+    return Grid(edges=tuple(o + d * np.arange(n + 1) for o, d, n in zip(snap.origin, snap.spacing, shape)),
+                cell_fields=snap.fields)
+
+
+def _particles(snap: fields.ParticleSnapshot) -> Particles:
+    return Particles(positions=snap.positions, point_fields=snap.fields)
+
+
 class GridWriter:
     """Rectilinear grids (:class:`blastfsi.method.Grid`) through :mod:`blastfsi.io.fields`:
     fields/member<k>_<i>.h5 per member and snapshot, fields/member<k>.xdmf."""
@@ -175,17 +192,12 @@ class GridWriter:
                                        snap.cell_fields)
 
     def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
-        origin, spacing = _uniform(template.edges)
-        shape = [len(e) - 1 for e in template.edges]
+        shape, origin, spacing, kinds = _grid_series_args(template)
         fields.write_grid_series(path / "fields" / f"member{member}.xdmf",
-                                 [(_member_file(i, member), t) for i, t in snapshots], shape, origin, spacing,
-                                 _value_kinds(template.cell_fields, len(shape)))
+                                 [(_member_file(i, member), t) for i, t in snapshots], shape, origin, spacing, kinds)
 
     def read(self, path: Path, index: int, member: int):
-        snap = fields.read_grid_snapshot(path / "fields" / _member_file(index, member))
-        shape = np.shape(next(iter(snap.fields.values())))[:snap.origin.size]
-        return Grid(edges=tuple(o + d * np.arange(n + 1) for o, d, n in zip(snap.origin, snap.spacing, shape)),
-                    cell_fields=snap.fields)
+        return _grid(fields.read_grid_snapshot(path / "fields" / _member_file(index, member)))
 
 
 class ParticleWriter:
@@ -198,21 +210,44 @@ class ParticleWriter:
                                            snap.point_fields)
 
     def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
-        entries = []
-        for i, t in snapshots:
-            with h5py.File(path / "fields" / _member_file(i, member), "r") as f:
-                entries.append((_member_file(i, member), t, int(f.attrs["n_points"])))
+        entries = [(_member_file(i, member), t, fields.particle_count(path / "fields" / _member_file(i, member)))
+                   for i, t in snapshots]
         fields.write_particle_series(path / "fields" / f"member{member}.xdmf", entries,
                                      _value_kinds(template.point_fields, 1))
 
     def read(self, path: Path, index: int, member: int):
-        snap = fields.read_particle_snapshot(path / "fields" / _member_file(index, member))
-        return Particles(positions=snap.positions, point_fields=snap.fields)
+        return _particles(fields.read_particle_snapshot(path / "fields" / _member_file(index, member)))
+
+
+class CoupledWriter:
+    """A grid plus particles (:class:`blastfsi.method.Coupled`) through :mod:`blastfsi.io.fields`: ONE file
+    fields/member<k>_<i>.h5 per member and snapshot (groups ``grid`` and ``particles``), and
+    fields/member<k>.xdmf, a time series of spatial collections (grid, particles)."""
+
+    def write(self, path: Path, index: int, time: float, members: list) -> None:
+        for k, snap in enumerate(members):
+            origin, spacing = _uniform(snap.grid.edges)
+            fields.write_coupled_snapshot(path / "fields" / _member_file(index, k), time, origin, spacing,
+                                          snap.grid.cell_fields, snap.particles.positions,
+                                          snap.particles.point_fields)
+
+    def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
+        shape, origin, spacing, grid_kinds = _grid_series_args(template.grid)
+        entries = [(_member_file(i, member), t,
+                    fields.particle_count(path / "fields" / _member_file(i, member), fields.PARTICLES_GROUP))
+                   for i, t in snapshots]
+        fields.write_coupled_series(path / "fields" / f"member{member}.xdmf", entries, shape, origin, spacing,
+                                    grid_kinds, _value_kinds(template.particles.point_fields, 1))
+
+    def read(self, path: Path, index: int, member: int):
+        snap = fields.read_coupled_snapshot(path / "fields" / _member_file(index, member))
+        return Coupled(grid=_grid(snap.grid), particles=_particles(snap.particles))
 
 
 register_writer("polyline", PolylineWriter())
 register_writer("grid", GridWriter())
 register_writer("particles", ParticleWriter())
+register_writer("coupled", CoupledWriter())
 
 
 def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node_fields, zone_fields, n_nodes) -> None:

@@ -90,6 +90,15 @@ class State(NamedTuple):
     external_work: jnp.ndarray  # work of body force and traction since the start [J]
 
 
+class NodalSource(NamedTuple):
+    """Contributions of something other than the particles to the nodal sums of one step: the
+    Eulerian cell centres acting as particles on the interface nodes of a coupled run (000 Eqs. 37-39)."""
+
+    mass: jnp.ndarray  # (num_nodes,) added to m_I, Eq. (37)
+    momentum: jnp.ndarray  # (num_nodes, dim) added to p_I, Eq. (38), and to the re-mapped momentum, Eq. (26)
+    force: jnp.ndarray  # (num_nodes, dim) added to f_I, Eq. (39)
+
+
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
                 combined_scatter: bool | None = None) -> Config:
     """Checked :class:`Config`; ``combined_scatter`` defaults to True except on
@@ -246,8 +255,9 @@ def _materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     return expand(jax.lax.cond(jnp.any(P.active), compute, zeros, P))
 
 
-def step(state: State, dt, params: Params, config: Config) -> State:
+def step(state: State, dt, params: Params, config: Config, source: NodalSource | None = None) -> State:
     """One MUSL step of length dt (module docstring). Pure; jit with ``config`` static.
+    ``source``: nodal mass, momentum and force from outside the particles (a coupled run), or None.
 
     Grid vectors carry the grid's ``dim`` components (the padded particle
     components stay zero); per-particle stencil arrays are kept component by
@@ -280,8 +290,10 @@ def step(state: State, dt, params: Params, config: Config) -> State:
         mwp = jnp.where(P.prescribed, mw, 0.0)
         channels += [mwp] + [mwp * P.prescribed_velocity[:, i] for i in range(d)]
     nodal = particle_to_grid(idx, channels, n_nodes, combined)
-    m_I, p_I = nodal[:, 0], nodal[:, 1:1 + d]  # Eqs. (21), (18)
-    f_I = nodal[:, 1 + d:1 + 2 * d] + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
+    m_I, p_I, f_I = nodal[:, 0], nodal[:, 1:1 + d], nodal[:, 1 + d:1 + 2 * d]  # Eqs. (21), (18), (19)
+    if source is not None:  # Eqs. (37)-(39)
+        m_I, p_I, f_I = m_I + source.mass, p_I + source.momentum, f_I + source.force
+    f_I = f_I + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
     m_fix, p_fix = (nodal[:, 1 + 2 * d], nodal[:, 2 + 2 * d:]) if config.prescribed else (None, None)
     has = m_I > 0.0
     inv_m = jnp.where(has, 1.0 / jnp.where(has, m_I, 1.0), 0.0)[:, None]
@@ -296,6 +308,8 @@ def step(state: State, dt, params: Params, config: Config) -> State:
         x_p = jnp.where((P.prescribed & act)[:, None], P.x + dt * P.prescribed_velocity, x_p)
     # Eq. (26): re-map of the updated particle momentum
     p2 = particle_to_grid(idx, [mw * v_p[:, i] for i in range(d)], n_nodes, combined)
+    if source is not None:
+        p2 = p2 + source.momentum
     v2 = gather_columns(idx, _constrain(p2 * inv_m, p_fix, m_fix, grid, config.prescribed), combined)
     # Eqs. (27)-(28) from the velocity gradient L_ij = sum_I v_iI dN_I/dx_j
     L = {(i, j): stencil_sum(v2[i] * grad[j]) for i in range(d) for j in range(d)}

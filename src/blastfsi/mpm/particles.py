@@ -189,13 +189,20 @@ def _select(mask, a, b):
 
 
 def add_particles(pool: Particles, batch: Particles):
+    """:func:`add_particles_at` without the slots."""
+    pool, required, _ = add_particles_at(pool, batch)
+    return pool, required
+
+
+def add_particles_at(pool: Particles, batch: Particles):
     """Fill free slots of ``pool`` with the active particles of ``batch`` (jittable).
 
     The k-th active particle of the batch goes to the k-th free slot (ranks by
-    cumulative sums, no sort). Returns ``(pool, required)``: ``required`` is
+    cumulative sums, no sort). Returns ``(pool, required, slots)``: ``required`` is
     the number of active particles after the add. When it exceeds the
     capacity nothing is added (the pool comes back unchanged) so the caller
-    can stop and report it.
+    can stop and report it. Also returns the slot of every batch entry
+    (``capacity`` for inactive entries and when nothing was added).
     """
     capacity, batch_size = pool.mass.shape[0], batch.mass.shape[0]
     free = ~pool.active
@@ -209,7 +216,7 @@ def add_particles(pool: Particles, batch: Particles):
     source = jnp.zeros(capacity, jnp.int32).at[target].set(jnp.arange(batch_size, dtype=jnp.int32), mode="drop")
     filled = jnp.zeros(capacity, bool).at[target].set(True, mode="drop")
     pool = jax.tree_util.tree_map(lambda p, b: _select(filled, b[source], p), pool, batch)
-    return pool, required
+    return pool, required, target
 
 
 _add_particles_compiled = jax.jit(add_particles)

@@ -91,7 +91,7 @@ def _box_of(body, grid: mpm.Grid) -> tuple[np.ndarray, np.ndarray]:
     return c - half, c + half
 
 
-def _inside(body, x: np.ndarray, grid: mpm.Grid) -> np.ndarray:
+def inside_body(body, x: np.ndarray, grid: mpm.Grid) -> np.ndarray:
     """Which positions (n, >= ndim) lie in the body (closed shape)."""
     d = grid.dim
     lo, hi = _box_of(body, grid)
@@ -150,12 +150,12 @@ def build(sc: MPMScenario) -> Setup:
         mat = library[b.material]
         lower, upper = _box_of(b, grid)
         x, vol, half = _fill(grid, lower, upper, b.particles_per_cell, key)
-        keep = _inside(b, x, grid)
+        keep = inside_body(b, x, grid)
         if not keep.any():
             raise ScenarioError(f"{key}: the body holds no particle; enlarge it or refine grid.cells")
         x, vol, half = x[keep], vol[keep], half[keep]
         for j, other in enumerate(sc.bodies[:k]):
-            clash = _inside(other, x, grid)
+            clash = inside_body(other, x, grid)
             if clash.any():
                 raise ScenarioError(f"bodies[{j}] and {key} overlap (e.g. at {x[clash][0, :d].tolist()} m); "
                                     "bodies must not share volume")
@@ -202,7 +202,7 @@ def build(sc: MPMScenario) -> Setup:
             keep = np.hypot(x[:, 0] - grid.origin[0], x[:, 1] - grid.origin[1]) <= 0.5 * imp.diameter
             x, vol, half = x[keep], vol[keep], half[keep]
         for j, other in enumerate(sc.bodies):
-            clash = _inside(other, x, grid)
+            clash = inside_body(other, x, grid)
             if clash.any():
                 raise ScenarioError(f"bodies[{j}] and the impactor overlap (e.g. at {x[clash][0, :d].tolist()} m)")
         v = np.zeros((len(vol), 3))

@@ -1,0 +1,477 @@
+"""Kernels of the bridge-region coupling (seed 000 Sec. 3), pure and jittable.
+
+Notation: the Eulerian state ``U`` (rows of :mod:`blastfsi.euler.config`) covers
+the whole domain; the MPM box holds particles (gas and structures); ``V = dx^ndim``
+is the cell measure (per unit depth in 2D, per unit area in 1D, like the
+particle masses). One coupled step (000 Sec. 3.5, the 14 steps regrouped):
+
+1. :func:`fictitious`: the box cells beyond the bridge take their values
+   from the gas particles (000 Eqs. 31-36): nodal sums of mass (per
+   material), momentum, internal energy and phase volume, interpolated to
+   the cell centre (the mean of the cell's 2^ndim nodes, N = 2^-ndim), then
+   divided by the interpolated gas volume (:func:`rows_from_sums`); products
+   volume fraction = products volume / gas volume. Cells the scheme never
+   reads (structures stay FICTITIOUS_DEPTH cells beyond the bridge) are
+   parked at their initial state.
+2. :func:`interface_source`: the Eulerian cells of the ring outside the box act
+   as particles on the interface nodes (000 Eqs. 37-39): mass rho V, momentum
+   rho V u, and internal force + grad N_I p V (their stress is -p I).
+3. The MPM step with that source and the Eulerian step with its face transfers
+   (``euler.step_with_transfers``), both over the same dt.
+4. Transport (000 Sec. 3.4), written so that mass is conserved exactly:
+
+   * what the Eulerian scheme moved across a coupled face (its own face
+     transfer, not the centred estimate of Eqs. 40-44, so that the Eulerian
+     region's loss is exactly what the MPM side receives) goes, per face cell
+     and material, into a *reservoir* with the convective momentum and energy
+     of the donor cell: m_k, m_k u, m_k (e_k + |u|^2/2); the pressure part of
+     the scheme's momentum and energy transfer reaches the MPM gas through the
+     interface nodes' force (step 2) and is booked as ``pressure_transfer``;
+   * a reservoir holding at least the nominal particle mass
+     m_nom = rho_bridge V / ppc^ndim emits particles (Eqs. 45-46: s = the whole
+     multiples of m_nom, at most ppc^(ndim-1) per step, mass m/s each) in the
+     first bridge cell, in the layer the gas occupies next to the face
+     (Eq. 47), with the donor phase density and the reservoir's velocity and
+     internal energy (Eq. 48 generalised: e = E/m - |v|^2/2);
+   * a gas particle that leaves the box through a coupled face is deleted and
+     its mass, momentum and energy (Eqs. 49-51) go to the reservoir of the face
+     cell it crossed (the Eulerian cell there already received the scheme's
+     transfer, so the reservoir records the MPM side's repayment); through a
+     face on the domain boundary it leaves the run (``boundary_out``).
+
+Mass budget, exact up to round-off: Eulerian-only cells + particles +
+reservoirs + boundary_out = constant from activation on.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from blastfsi import euler as ek
+from blastfsi import mpm
+from blastfsi.constitutive import PointState
+from blastfsi.eos import jwl
+from blastfsi.euler.config import layout as row_layout
+from blastfsi.euler.mixture import cell_state, cold_terms, eos_rows
+from blastfsi.mpm.musl import wave_speed
+
+
+class Layout(NamedTuple):
+    """Traced arrays of the coupling layout (built by :mod:`blastfsi.problems.cfdmp`)."""
+
+    fictitious: jnp.ndarray  # (*shape) bool: box cells beyond the bridges
+    parked: jnp.ndarray  # (*shape) bool: fictitious cells the scheme never reads
+    outside: jnp.ndarray  # (*shape) bool: Eulerian-only cells
+    park_rows: jnp.ndarray  # (nvar, *shape) the parked state (the initial state)
+    ring_cells: jnp.ndarray  # (R,) flat Eulerian indices of the ring cells
+    ring_idx: jnp.ndarray  # (S, R) MPM node indices of their stencils
+    ring_w: jnp.ndarray  # (S, R) N_Ic
+    ring_grad: jnp.ndarray  # (ndim, S, R) dN_Ic/dx
+    face_out: jnp.ndarray  # (F,) flat Eulerian index of the cell outside each face cell
+    face_in: jnp.ndarray  # (F,) flat Eulerian index of the bridge cell
+    face_centre: jnp.ndarray  # (F, 3) centre of each face cell's face [m]
+    face_into: jnp.ndarray  # (F,) +1 (lower box face) / -1 (upper)
+    face_axis: jnp.ndarray  # (F, 3) unit normal into the box
+    face_lateral: jnp.ndarray  # (F, 3, 3) rows: unit vectors along the face (zero rows beyond ndim - 1)
+    gas_x: jnp.ndarray  # (G, 3) gas lattice
+    gas_volume: jnp.ndarray  # (G,)
+    gas_half: jnp.ndarray  # (G, 3)
+    gas_cell: jnp.ndarray  # (G,)
+    boundary_mask: tuple  # per axis (lower, upper) bool arrays over the domain-face cells (Eulerian-only)
+    box_lower: jnp.ndarray  # (3,) [m]
+    box_upper: jnp.ndarray  # (3,)
+
+
+class Static(NamedTuple):
+    """Hashable configuration of a coupled run."""
+
+    euler: ek.Config
+    mpm: mpm.Config
+    faces: tuple  # (axis, side, plane) per coupled face
+    face_sizes: tuple  # face cells per coupled face
+    box_lo: tuple  # box cell range in the Eulerian grid
+    box_hi: tuple
+    mpm_offset: tuple  # Eulerian cell index of the MPM grid's first cell
+    gas_material: tuple  # MPM material index of each Eulerian material
+    n_structure: int  # structure particles (first slots of the pool)
+    ppc: int  # gas particles per cell and direction
+
+
+class Reservoirs(NamedTuple):
+    mass: jnp.ndarray  # (F, n_materials) [kg]
+    momentum: jnp.ndarray  # (F, n_materials, 3)
+    energy: jnp.ndarray  # (F, n_materials) total energy [J]
+    buffer: jnp.ndarray  # (F, n_materials) int32 pool slot of each inflow particle (-1: none)
+
+
+class Budget(NamedTuple):
+    """Running sums of what crossed the system's boundary and what the interface exchanged."""
+
+    boundary_out: jnp.ndarray  # (n_materials + ndim + 1,) mass per material, momentum, energy that left
+    pressure_transfer: jnp.ndarray  # (ndim + 1,) momentum and energy of the scheme's face transfer not carried
+    #                                 by the reservoirs (the interface pressure's impulse and work)
+    required: jnp.ndarray  # () int32: active particles an emission needed (> capacity: the run stops)
+
+
+def cell_measure(cfg: ek.Config) -> float:
+    """V = dx^ndim: the Cartesian cell measure in the units of the particle masses."""
+    return float(cfg.dx ** len(cfg.shape))
+
+
+def flat_primitives(U, eos, cfg: ek.Config) -> dict:
+    """rho (N,), velocity (ndim, N), pressure (N,) and phase densities rho_k (n, N) of every cell (C order)."""
+    lay = row_layout(cfg)
+    st = cell_state(tuple(U.reshape(U.shape[0], -1)), eos_rows(eos, lay.n), lay)
+    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "rho_k": jnp.stack(st.rho_k)}
+
+
+def _gas_index(static: Static, material):
+    """Eulerian material slot of each particle (-1: a structure)."""
+    slot = jnp.full(material.shape, -1, jnp.int32)
+    for k, m in enumerate(static.gas_material):
+        slot = jnp.where(material == m, k, slot)
+    return slot
+
+
+def _node_to_cell(nodal, grid: mpm.Grid):
+    """(num_nodes, C) -> (*cells, C): mean of each cell's 2^dim nodes (N = 2^-dim at the centre)."""
+    block = nodal.reshape(grid.nodes + (nodal.shape[1],))
+    out = 0.0
+    d = grid.dim
+    for corner in range(2 ** d):
+        idx = tuple(slice(1, None) if (corner >> j) & 1 else slice(None, -1) for j in range(d))
+        out = out + block[idx]
+    return out / 2 ** d
+
+
+def gas_sums(P: mpm.Particles, static: Static):
+    """Per MPM cell (*cells, 2 n + ndim + 1): mass and volume per material, momentum, internal energy
+    (000 Eqs. 31-33), from the gas particles only."""
+    cfg = static.mpm
+    grid, d = cfg.grid, cfg.grid.dim
+    n = len(static.gas_material)
+    slot = _gas_index(static, P.material)
+    gas = P.active & (slot >= 0)
+    idx, w, _ = mpm.stencil(P.x, P.half_size, grid, cfg.shape)
+    m = jnp.where(gas, P.mass, 0.0)
+    vol = m / P.point.density
+    channels = [w * jnp.where(slot == k, m, 0.0) for k in range(n)]
+    channels += [w * jnp.where(slot == k, vol, 0.0) for k in range(n)]
+    channels += [w * (m * P.v[:, i]) for i in range(d)]
+    channels += [w * (m * P.point.energy)]
+    nodal = mpm.musl.particle_to_grid(idx, channels, grid.num_nodes, cfg.combined_scatter)
+    return _node_to_cell(nodal, grid)
+
+
+def _embed(cells, static: Static, shape):
+    """MPM-cell array (*mpm_cells, C) -> Eulerian-grid rows (C, *shape), zero outside the MPM grid."""
+    sl = tuple(slice(o, o + c) for o, c in zip(static.mpm_offset, static.mpm.grid.cells))
+    out = jnp.zeros((cells.shape[-1],) + tuple(shape), cells.dtype)
+    return out.at[(slice(None),) + sl].set(jnp.moveaxis(cells, -1, 0))
+
+
+def rows_from_sums(sums, n: int, d: int):
+    """Conservative rows (partials, momentum, E, alpha) and the gas volume from per-cell sums.
+
+    000 Eqs. (34)-(36) divide the interpolated mass, momentum and energy by the cell volume V_c; here they
+    are divided by the interpolated volume of the gas particles themselves (sum N m/rho), i.e. the rows
+    hold the mass-weighted means of the particles' density, velocity and specific energy. For a uniform gas
+    both agree; the particles' version stays exact when their spacing is uneven (after the bridge has
+    created particles) and next to structures, where V_c would count the structure's volume as gas.
+    """
+    mass_k = [sums[k] for k in range(n)]
+    vol_k = [sums[n + k] for k in range(n)]
+    mom = [sums[2 * n + i] for i in range(d)]
+    internal = sums[2 * n + d]
+    m = sum(mass_k)
+    vol = sum(vol_k)
+    safe_m = jnp.where(m > 0.0, m, 1.0)
+    safe_v = jnp.where(vol > 0.0, vol, 1.0)
+    energy = (internal + 0.5 * sum(p * p for p in mom) / safe_m) / safe_v
+    rows = [mk / safe_v for mk in mass_k] + [p / safe_v for p in mom] + [energy]
+    if n == 2:
+        rows.append(vol_k[0] / safe_v)
+    return jnp.stack(rows), vol
+
+
+def gas_rows(P: mpm.Particles, static: Static):
+    """Conservative rows over the Eulerian grid from the gas particles (000 Eqs. 31-36) and the interpolated
+    gas volume per cell (zero outside the MPM grid)."""
+    cfg = static.euler
+    sums = _embed(gas_sums(P, static), static, cfg.shape)
+    return rows_from_sums(sums, cfg.n_materials, len(cfg.shape))
+
+
+def fictitious(U, rows, gas_mass, layout: Layout):
+    """U for the scheme: the fictitious cells it reads from the particles, the parked ones at their
+    initial state (step 1 of the module docstring)."""
+    read = layout.fictitious & ~layout.parked & (gas_mass > 0.0)
+    return jnp.where(layout.parked, layout.park_rows, jnp.where(read, rows, U))
+
+
+def view(U, rows, gas_mass, layout: Layout):
+    """U for fields and gauges: every box cell beyond the bridges that holds gas from the particles."""
+    return jnp.where(layout.fictitious & (gas_mass > 0.0), rows, U)
+
+
+def interface_source(prim_flat: dict, layout: Layout, static: Static) -> mpm.musl.NodalSource:
+    """000 Eqs. (37)-(39): the ring cells as particles of mass rho V and stress -p I."""
+    grid = static.mpm.grid
+    d = grid.dim
+    V = cell_measure(static.euler)
+    rho = prim_flat["rho"][layout.ring_cells]
+    vel = prim_flat["velocity"][:, layout.ring_cells]
+    p = prim_flat["pressure"][layout.ring_cells]
+    idx = layout.ring_idx.reshape(-1)
+
+    def scatter(values):
+        return jnp.zeros(grid.num_nodes, rho.dtype).at[idx].add(values.reshape(-1))
+
+    w = layout.ring_w
+    mass = scatter(w * (rho * V))
+    mom = jnp.stack([scatter(w * (rho * V * vel[i])) for i in range(d)], axis=1)
+    force = jnp.stack([scatter(layout.ring_grad[i] * (p * V)) for i in range(d)], axis=1)
+    return mpm.musl.NodalSource(mass, mom, force)
+
+
+def face_transfers(T, static: Static):
+    """(nvar, F): the scheme's transfer through every face cell of the coupled faces, low to high side."""
+    out = []
+    for (axis, _side, plane), size in zip(static.faces, static.face_sizes):
+        sl = [slice(None)]
+        for a in range(len(static.euler.shape)):
+            sl.append(plane if a == axis else slice(static.box_lo[a], static.box_hi[a]))
+        out.append(T[axis][tuple(sl)].reshape(T[axis].shape[0], size))
+    return jnp.concatenate(out, axis=1)
+
+
+def phase_energy(rho_k, p, rows):
+    """Specific internal energy of each phase at its density and the cell pressure (Mie-Grueneisen form
+    p = f(rho) + G rho e, blastfsi.eos.jwl): e_k = (p - f_k(rho_k)) / (G_k rho_k)."""
+    return [(p - cold_terms(r, row)[0]) / (row.omega * r) for r, row in zip(rho_k, rows)]
+
+
+def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, V):
+    """Add per-entry content (mass per material (n, E), momentum (d, E), energy (E,), phase volume (n, E)) to the
+    Eulerian cells ``cells`` (E,) (000 Eqs. 49-51); the products fraction becomes the volume-weighted mean of the
+    cell's and the added gas (a scatter, entries may share a cell)."""
+    flat = U.reshape(U.shape[0], -1)
+    n, d = lay.n, lay.ndim
+    new = [flat[k].at[cells].add(mass_k[k] / V) for k in range(n)]
+    new += [flat[lay.mom + i].at[cells].add(momentum[i] / V) for i in range(d)]
+    new += [flat[lay.energy].at[cells].add(energy / V)]
+    if n == 2:
+        added = jnp.zeros_like(flat[0]).at[cells].add(volume_k[0] + volume_k[1])
+        added_p = jnp.zeros_like(flat[0]).at[cells].add(volume_k[0])
+        new += [(flat[lay.alpha] * V + added_p) / (V + added)]
+    return jnp.stack(new).reshape(U.shape)
+
+
+def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Static, layout: Layout):
+    """The scheme's transfers through the coupled faces (module docstring): inflow into the reservoirs, the
+    convective part of outflow taken back from the Eulerian cell (the deleted particles replace it)."""
+    cfg = static.euler
+    n, d = cfg.n_materials, len(cfg.shape)
+    lay = row_layout(cfg)
+    V = cell_measure(cfg)
+    tf = face_transfers(T, static) * (layout.face_into * V)  # content into the box
+    m_k = tf[:n]  # (n, F)
+    inflow = jnp.sum(m_k, axis=0) > 0.0
+    donor = jnp.where(inflow, layout.face_out, layout.face_in)
+    u = prim_flat["velocity"][:, donor]  # (d, F)
+    p = prim_flat["pressure"][donor]
+    rho_k = [prim_flat["rho_k"][k][donor] for k in range(n)]
+    e_k = phase_energy(rho_k, p, eos_rows(eos, n))
+    ke = 0.5 * jnp.sum(u * u, axis=0)
+    carried_mom = jnp.sum(m_k, axis=0)[None] * u
+    carried_e = jnp.stack([m_k[k] * (e_k[k] + ke) for k in range(n)])  # (n, F)
+    pressure = jnp.concatenate([jnp.sum(tf[lay.mom:lay.mom + d] - carried_mom, axis=1),
+                                jnp.sum(tf[lay.energy] - jnp.sum(carried_e, axis=0))[None]])
+    m_in = jnp.where(inflow, m_k, 0.0)
+    u3 = jnp.zeros((3,) + u.shape[1:], u.dtype).at[:d].set(u)
+    res = res._replace(mass=res.mass + m_in.T,
+                       momentum=res.momentum + (m_in[:, None, :] * u3[None]).transpose(2, 0, 1),
+                       energy=res.energy + jnp.where(inflow, carried_e, 0.0).T)
+    out = ~inflow  # m_k <= 0: the Eulerian cell received -m_k; take the convective part back
+    vol_k = jnp.stack([jnp.where(out, m_k[k] / rho_k[k], 0.0) for k in range(n)])
+    U = _add_to_cells(U, layout.face_out, jnp.where(out, m_k, 0.0), jnp.where(out, carried_mom, 0.0),
+                      jnp.where(out, jnp.sum(carried_e, axis=0), 0.0), vol_k, lay, V)
+    return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
+
+
+def boundary_outflow(T, static: Static, layout: Layout):
+    """Mass per material, momentum and energy that left the Eulerian-only cells through domain faces."""
+    cfg = static.euler
+    n, d = cfg.n_materials, len(cfg.shape)
+    lay = row_layout(cfg)
+    rows = list(range(n)) + list(range(lay.mom, lay.mom + d)) + [lay.energy]
+    out = 0.0
+    for axis in range(d):
+        t = T[axis][jnp.asarray(rows)]
+        lo, hi = jnp.take(t, 0, axis=1 + axis), jnp.take(t, cfg.shape[axis], axis=1 + axis)
+        m_lo, m_hi = layout.boundary_mask[axis]
+        red = tuple(range(1, lo.ndim))
+        out = out + jnp.sum(jnp.where(m_hi, hi, 0.0), axis=red) - jnp.sum(jnp.where(m_lo, lo, 0.0), axis=red)
+    return out * cell_measure(cfg)
+
+
+def particle_content(P: mpm.Particles):
+    """(mass, momentum (n, 3), total energy) of every particle."""
+    ke = 0.5 * jnp.sum(P.v * P.v, axis=1)
+    return P.mass, P.mass[:, None] * P.v, P.mass * (P.point.energy + ke)
+
+
+def remove_leaving(U, state: mpm.State, budget: Budget, static: Static, layout: Layout):
+    """Delete the gas particles outside the box: through a coupled face their mass, momentum and energy go
+    to the Eulerian cell they moved into (000 Eqs. 49-51); through a face on the domain boundary they
+    leave the run (``boundary_out``)."""
+    P = state.particles
+    cfg = static.euler
+    d = static.mpm.grid.dim
+    n = len(static.gas_material)
+    lay = row_layout(cfg)
+    slot = _gas_index(static, P.material)
+    gas = P.active & (slot >= 0)
+    x = P.x[:, :d]
+    lo, hi = layout.box_lower[:d], layout.box_upper[:d]
+    out_any = gas & jnp.any((x < lo) | (x > hi), axis=1)
+    face = jnp.full(P.mass.shape, -1, jnp.int32)
+    first = 0
+    h = static.mpm.grid.cell_size
+    for (axis, side, _plane), size in zip(static.faces, static.face_sizes):
+        crossed = gas & ((x[:, axis] < lo[axis]) if side == 0 else (x[:, axis] > hi[axis]))
+        lateral = jnp.zeros(P.mass.shape, jnp.int32)
+        for a in range(d):
+            if a == axis:
+                continue
+            n_a = static.box_hi[a] - static.box_lo[a]
+            i = jnp.clip(jnp.floor((x[:, a] - lo[a]) / h).astype(jnp.int32), 0, n_a - 1)
+            lateral = lateral * n_a + i
+        face = jnp.where(crossed & (face < 0), first + lateral, face)
+        first += size
+    mass, mom, energy = particle_content(P)
+    to_euler = out_any & (face >= 0)
+    cells = layout.face_out[jnp.clip(face, 0, first - 1)]
+    into = [jnp.where(to_euler & (slot == k), mass, 0.0) for k in range(n)]
+    vol = [m / P.point.density for m in into]
+    U = _add_to_cells(U, cells, jnp.stack(into), jnp.where(to_euler[None], mom.T[:d], 0.0),
+                      jnp.where(to_euler, energy, 0.0), jnp.stack(vol), lay, cell_measure(cfg))
+    gone = out_any & ~to_euler
+    left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(gone & (slot == j), mass, 0.0)) for j in range(n)]),
+                            jnp.sum(jnp.where(gone[:, None], mom, 0.0), axis=0)[:d],
+                            jnp.sum(jnp.where(gone, energy, 0.0))[None]])
+    P = P._replace(active=P.active & ~out_any)
+    return U, state._replace(particles=P), budget._replace(boundary_out=budget.boundary_out + left)
+
+
+def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, params: mpm.Params, static: Static,
+         layout: Layout):
+    """Move the reservoirs' content into the inflow particles (module docstring, Eqs. 45-48).
+
+    Each face cell and material has one *inflow particle* that represents the gas entered through it since
+    the last release: the layer next to the face, of thickness m / (rho h^(ndim-1)), spanning the face cell
+    (GIMP half-sizes: half the thickness normal to the face, h/2 along it), with the bridge cell's phase
+    density, the mass-weighted velocity and the internal energy left by the total energy (Eq. 48
+    generalised: e = E/m - |v|^2/2), stress -p I from its EOS. It is released to move with the MPM solution
+    once it is as thick as a gas particle (h / ppc), and the next one starts at the face; so no gap opens
+    between the face and the gas inside.
+    """
+    cfg, grid = static.euler, static.mpm.grid
+    d, h, ppc = grid.dim, grid.cell_size, static.ppc
+    n = cfg.n_materials
+    P = state.particles
+    cap = P.mass.shape[0]
+    gm = jnp.asarray(static.gas_material, jnp.int32)
+    rho = jnp.stack([prim_flat["rho_k"][k][layout.face_in] for k in range(n)], axis=1)  # (F, n)
+    b = jnp.clip(res.buffer, 0, cap - 1)
+    near = jnp.all(jnp.abs(P.x[b] - layout.face_centre[:, None, :]) <= 1.01 * h, axis=-1)  # slot not reused
+    has = (res.buffer >= 0) & P.active[b] & (P.material[b] == gm[None, :]) & near
+    m_old = jnp.where(has, P.mass[b], 0.0)
+    v_old = jnp.where(has[..., None], P.v[b], 0.0)
+    e_old = jnp.where(has, P.point.energy[b], 0.0)
+    fed = res.mass > 0.0
+    m = m_old + res.mass
+    safe = jnp.where(m > 0.0, m, 1.0)
+    v = (m_old[..., None] * v_old + res.momentum) / safe[..., None]
+    e = (m_old * (e_old + 0.5 * jnp.sum(v_old * v_old, axis=-1)) + res.energy) / safe - 0.5 * jnp.sum(v * v, axis=-1)
+    e = jnp.maximum(e, 0.0)
+    thick = jnp.clip(m / (rho * h ** (d - 1)), 0.0, h)
+    x = layout.face_centre[:, None, :] + layout.face_axis[:, None, :] * (0.5 * thick)[..., None]
+    half = jnp.abs(layout.face_axis)[:, None, :] * (0.5 * thick)[..., None]
+    half = half + jnp.sum(jnp.abs(layout.face_lateral), axis=1)[:, None, :] * (0.5 * h)
+    rows = eos_rows(eos, n)
+    material = jnp.broadcast_to(gm[None, :], m.shape)
+    pressure = jnp.stack([jwl.pressure(rho[:, k], e[:, k], rows[k]) for k in range(n)], axis=1)
+
+    def flat(a):
+        return a.reshape((-1,) + a.shape[2:])
+
+    zero = jnp.zeros(flat(m).shape, m.dtype)
+    hist = P.point.history.shape[1]
+    point = PointState(stress=jnp.stack([-flat(pressure)] * 3 + [zero] * 3, axis=1), density=flat(rho),
+                       energy=flat(e), plastic_strain=zero, damage=zero, history=jnp.zeros((zero.shape[0], hist),
+                                                                                           zero.dtype))
+    batch = mpm.Particles(x=flat(x), v=flat(v), mass=flat(safe), volume0=flat(safe) / flat(rho), half_size=flat(half),
+                          material=flat(material), active=flat(fed & ~has), point=point, q=zero, vol_rate=zero,
+                          wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(zero.shape, bool),
+                          prescribed_velocity=jnp.zeros_like(flat(x)), surface_load=jnp.zeros_like(flat(x)))
+    batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
+    pool, required, slots = mpm.add_particles_at(P, batch)
+    fits = required <= cap
+    # grow the existing inflow particles in place
+    grow = flat(fed & has) & fits
+    idx = jnp.where(grow, flat(b), cap)
+    pool = jax.tree_util.tree_map(lambda p, q: p.at[idx].set(q, mode="drop"), pool, batch._replace(
+        active=jnp.ones_like(batch.active), volume0=pool.volume0[flat(b)]))
+    buffer = jnp.where(flat(fed & ~has), slots, flat(jnp.where(has, res.buffer, -1))).reshape(m.shape)
+    buffer = jnp.where(fits, buffer, res.buffer)
+    released = thick >= h / ppc
+    buffer = jnp.where(released & fits, -1, buffer).astype(jnp.int32)
+    keep = ~fits
+    res = Reservoirs(mass=jnp.where(keep, res.mass, 0.0), momentum=jnp.where(keep, res.momentum, 0.0),
+                     energy=jnp.where(keep, res.energy, 0.0), buffer=buffer)
+    budget = budget._replace(required=jnp.maximum(budget.required, required.astype(jnp.int32)))
+    return state._replace(particles=pool), res, budget
+
+
+def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: Static, layout: Layout):
+    """The gas of the box becomes particles (000 Sec. 3, activation): one particle per lattice point and
+    material present, mass = partial density x lattice volume, the cell's velocity, the phase density and
+    the phase internal energy at the cell pressure (so the cell's mass, momentum and energy carry over
+    exactly). Returns the new state and the number of active particles needed."""
+    cfg, d = static.euler, static.mpm.grid.dim
+    n = cfg.n_materials
+    cell = layout.gas_cell
+    flat = U.reshape(U.shape[0], -1)[:, cell]  # (nvar, G)
+    rho_k = prim_flat["rho_k"][:, cell]  # (n, G)
+    p = prim_flat["pressure"][cell]
+    e_k = phase_energy(list(rho_k), p, eos_rows(eos, n))
+    u = prim_flat["velocity"][:, cell]  # (d, G)
+    G = cell.shape[0]
+    mass = jnp.stack([flat[k] * layout.gas_volume for k in range(n)])  # (n, G)
+    cell_mass = jnp.sum(mass, axis=0)
+    present = mass > 1e-12 * cell_mass[None]
+    rho = jnp.where(present, rho_k, 1.0)
+    energy = jnp.stack(e_k)
+    material = jnp.broadcast_to(jnp.asarray(static.gas_material, jnp.int32)[:, None], (n, G))
+    rows = eos_rows(eos, n)
+    pressure = jnp.stack([jwl.pressure(rho[k], energy[k], rows[k]) for k in range(n)])
+    zero = jnp.zeros(n * G, U.dtype)
+    hist = state.particles.point.history.shape[1]
+    point = PointState(stress=jnp.stack([-pressure.reshape(-1)] * 3 + [zero] * 3, axis=1), density=rho.reshape(-1),
+                       energy=energy.reshape(-1), plastic_strain=zero, damage=zero,
+                       history=jnp.zeros((n * G, hist), U.dtype))
+    vel = jnp.zeros((n, G, 3), U.dtype).at[:, :, :d].set(jnp.broadcast_to(u.T[None], (n, G, d)))
+    x = jnp.broadcast_to(layout.gas_x[None], (n, G, 3)).reshape(-1, 3)
+    half = jnp.broadcast_to(layout.gas_half[None], (n, G, 3)).reshape(-1, 3)
+    m = jnp.where(present, mass, 0.0).reshape(-1)
+    batch = mpm.Particles(x=x, v=vel.reshape(-1, 3), mass=jnp.where(m > 0.0, m, 1.0),
+                          volume0=jnp.where(m > 0.0, m, 1.0) / rho.reshape(-1), half_size=half,
+                          material=material.reshape(-1), active=present.reshape(-1), point=point, q=zero,
+                          vol_rate=zero, wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(n * G, bool),
+                          prescribed_velocity=jnp.zeros_like(half), surface_load=jnp.zeros_like(half))
+    batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
+    pool, required = mpm.add_particles(state.particles, batch)
+    return state._replace(particles=pool), required

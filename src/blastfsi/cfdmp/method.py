@@ -1,0 +1,446 @@
+"""The ``cfdmp`` method behind the driver's face: the Eulerian solver (:mod:`blastfsi.euler`) and the MPM
+solver (:mod:`blastfsi.mpm`) coupled through the bridge region (:mod:`blastfsi.cfdmp.coupling`, seed 000 Sec. 3).
+
+Before activation only the Eulerian solver runs, over the whole domain; when the overpressure in a cell
+bordering the MPM box exceeds ``mpm_region.activation_overpressure`` the gas of the box becomes particles
+(:func:`coupling.activate`) and every later step is the coupled step of 000 Sec. 3.5. The history books the
+conservation budget of the coupled system: Eulerian-only cells + particles + reservoirs + what left through
+the domain boundary, against its value at activation.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from blastfsi import euler as ek
+from blastfsi import mpm, timeloop
+from blastfsi.cfdmp import coupling as cp
+from blastfsi.cfdmp.scenario import CfdmpScenario
+from blastfsi.diagnostics import blast_maps
+from blastfsi.euler.method import GEOMETRY_CODE, SCHEME_CODE
+from blastfsi.euler.scenario import AXES
+from blastfsi.method import Grid, register
+from blastfsi.mpm.method import VOIGT_TO_TENSOR
+from blastfsi.problems import cfdmp as problem
+
+
+class State(NamedTuple):
+    U: jnp.ndarray  # Eulerian rows, fictitious cells consistent with the particles
+    peak: jnp.ndarray  # blast maps of the viewed field (Eulerian cells and the particles' cells)
+    arrival: jnp.ndarray
+    end: jnp.ndarray
+    impulse: jnp.ndarray
+    last: jnp.ndarray
+    mpm: mpm.State
+    reservoirs: cp.Reservoirs
+    budget: cp.Budget
+    coupled: jnp.ndarray  # () bool
+    baseline: jnp.ndarray  # (n + ndim + 1,) system totals at activation (mass per material, momentum, energy)
+    displaced: jnp.ndarray  # (n + ndim + 1,) gas of the box not turned into particles (inside structures)
+    t: jnp.ndarray
+    dt_prev: jnp.ndarray
+    dt0: jnp.ndarray
+    step: jnp.ndarray
+    fault: jnp.ndarray
+    hist: jnp.ndarray
+    hist_next: jnp.ndarray
+
+
+class Params(NamedTuple):
+    euler: ek.Params
+    mpm: mpm.Params
+    layout: cp.Layout
+    reference_pressure: jnp.ndarray
+    arrival_threshold: jnp.ndarray
+    activation: jnp.ndarray  # overpressure that starts the coupling [Pa]
+    structure_x0: jnp.ndarray  # (n_structure, 3) initial positions
+
+
+class Static(NamedTuple):
+    coupling: cp.Static
+    gauge_cells: tuple
+    capacity: int
+
+
+def _maps(s: State) -> blast_maps.BlastMaps:
+    return blast_maps.BlastMaps(s.peak, s.arrival, s.end, s.impulse, s.last)
+
+
+def _cast(tree, dtype):
+    return jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype) if jnp.issubdtype(jnp.asarray(a).dtype,
+                                                                                    jnp.floating) else a, tree)
+
+
+def _pad3(a: np.ndarray) -> np.ndarray:
+    a = np.atleast_2d(np.asarray(a, float))
+    return np.pad(a, ((0, 0), (0, 3 - a.shape[1])))
+
+
+def system_totals(U, P: mpm.Particles, res: cp.Reservoirs, layout: cp.Layout, static: cp.Static):
+    """(n + ndim + 1,) mass per material, momentum and total energy of Eulerian-only cells + particles +
+    reservoirs, and the same three parts separately."""
+    cfg = static.euler
+    n, d = cfg.n_materials, len(cfg.shape)
+    lay = ek.config.layout(cfg)
+    V = cp.cell_measure(cfg)
+    axes = tuple(range(1, U.ndim))
+    rows = jnp.concatenate([U[:n], U[lay.mom:lay.mom + d], U[lay.energy:lay.energy + 1]])
+    euler = jnp.sum(jnp.where(layout.outside, rows, 0.0), axis=axes) * V
+    mass, mom, energy = cp.particle_content(P)
+    slot = cp._gas_index(static, P.material)
+    on = P.active
+    per_material = [jnp.sum(jnp.where(on & (slot == k), mass, 0.0)) for k in range(n)]
+    structure = jnp.sum(jnp.where(on & (slot < 0), mass, 0.0))
+    particles = jnp.concatenate([jnp.stack(per_material), jnp.sum(jnp.where(on[:, None], mom, 0.0), axis=0)[:d],
+                                 jnp.sum(jnp.where(on, energy, 0.0))[None]])
+    reservoirs = jnp.concatenate([jnp.sum(res.mass, axis=0), jnp.sum(res.momentum, axis=(0, 1))[:d],
+                                  jnp.sum(res.energy)[None]])
+    return euler + particles + reservoirs, euler, particles, reservoirs, structure
+
+
+class Cfdmp:
+    name = "cfdmp"
+    scenario_model = CfdmpScenario
+
+    def build(self, sc: CfdmpScenario) -> problem.Setup:
+        return problem.build(sc)
+
+    def static(self, setup: problem.Setup, sc: CfdmpScenario) -> Static:
+        return self._static(setup, SCHEME_CODE[sc.numerics.scheme])
+
+    @staticmethod
+    def _static(setup: problem.Setup, scheme: int) -> Static:
+        e = setup.euler
+        cfg = ek.Config(shape=e.grid.shape, dx=float(e.grid.dx), geometry=GEOMETRY_CODE[e.grid.geometry], bc=e.bc,
+                        scheme=scheme, n_materials=len(e.materials),
+                        origin=tuple(float(v) for v in e.grid.lower))
+        mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"])
+        faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
+        sizes = tuple(int(f.outside.size) for f in setup.faces)
+        offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))
+        n_struct = int(setup.info["structure_particles"])
+        coupling = cp.Static(cfg, mcfg, faces, sizes, tuple(setup.box_lo), tuple(setup.box_hi), offset,
+                             tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]))
+        flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
+        return Static(coupling, flat, setup.capacity)
+
+    def params(self, setup: problem.Setup, dtype) -> Params:
+        e = setup.euler
+        info = setup.info
+        nd = e.grid.ndim
+        grid = setup.grid
+        kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype))
+        mp = mpm.make_params(setup.model_params, cfl=info["cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
+                             dtype=dtype)
+        shape = mpm.SHAPES[info["shape_functions"]]
+        half = np.zeros((setup.ring_cells.size, 3))
+        half[:, :nd] = 0.5 * grid.cell_size
+        ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(half, dtype), grid, shape)
+        axis_vec = np.concatenate([np.tile(np.eye(3)[f.axis] * f.into_box, (f.outside.size, 1)) for f in setup.faces])
+        lateral = []
+        for f in setup.faces:
+            rows = np.zeros((3, 3))
+            for j, a in enumerate(a for a in range(nd) if a != f.axis):
+                rows[j, a] = 1.0
+            lateral.append(np.tile(rows[None], (f.outside.size, 1, 1)))
+        box_lo = np.zeros(3)
+        box_hi = np.zeros(3)
+        box_lo[:nd] = [e.grid.lower[a] + setup.box_lo[a] * e.grid.dx for a in range(nd)]
+        box_hi[:nd] = [e.grid.lower[a] + setup.box_hi[a] * e.grid.dx for a in range(nd)]
+        U0 = self._initial_rows(setup, kp, dtype)
+        layout = cp.Layout(
+            fictitious=jnp.asarray(setup.fictitious), parked=jnp.asarray(setup.parked),
+            outside=jnp.asarray(setup.outside), park_rows=U0,
+            ring_cells=jnp.asarray(setup.ring_cells, jnp.int32), ring_idx=ridx, ring_w=rw, ring_grad=jnp.stack(rgrad),
+            face_out=jnp.asarray(np.concatenate([f.outside for f in setup.faces]), jnp.int32),
+            face_in=jnp.asarray(np.concatenate([f.bridge for f in setup.faces]), jnp.int32),
+            face_centre=jnp.asarray(_pad3(np.concatenate([f.centre for f in setup.faces])), dtype),
+            face_into=jnp.asarray(np.concatenate([np.full(f.outside.size, f.into_box) for f in setup.faces]), dtype),
+            face_axis=jnp.asarray(axis_vec, dtype), face_lateral=jnp.asarray(np.concatenate(lateral), dtype),
+            gas_x=jnp.asarray(setup.gas_x, dtype), gas_volume=jnp.asarray(setup.gas_volume, dtype),
+            gas_half=jnp.asarray(setup.gas_half, dtype), gas_cell=jnp.asarray(setup.gas_cell, jnp.int32),
+            boundary_mask=tuple(tuple(jnp.asarray(m) for m in pair) for pair in setup.boundary_faces),
+            box_lower=jnp.asarray(box_lo, dtype), box_upper=jnp.asarray(box_hi, dtype))
+        x0 = np.zeros((0, 3)) if setup.structures is None else np.asarray(setup.structures.x)
+        return Params(kp, _cast(mp, dtype), layout, jnp.asarray(e.reference_pressure, dtype),
+                      jnp.asarray(info["arrival_fraction"] * e.reference_pressure, dtype),
+                      jnp.asarray(info["activation_overpressure"], dtype), jnp.asarray(x0, dtype))
+
+    @staticmethod
+    def _initial_rows(setup: problem.Setup, kp: ek.Params, dtype):
+        e = setup.euler
+        cfg = ek.Config(e.grid.shape, float(e.grid.dx), 0, e.bc, 1, len(e.materials), tuple(e.grid.lower))
+        return ek.conservative(jnp.asarray(e.rho_k, dtype), jnp.asarray(e.alpha[0], dtype),
+                               jnp.asarray(e.velocity, dtype), jnp.asarray(e.pressure, dtype), kp, cfg)
+
+    def initial_state(self, setup: problem.Setup, sc: CfdmpScenario, n_samples: int, dtype) -> State:
+        static = self.static(setup, sc)
+        prm = self.params(setup, dtype)
+        cs = static.coupling
+        n, d = cs.euler.n_materials, len(cs.euler.shape)
+        U = prm.layout.park_rows
+        hist = max(m.history_size for m in setup.models)
+        if setup.structures is None:
+            pool = mpm.empty(setup.capacity, hist, dtype)
+        else:
+            batch = setup.structures
+            pad = hist - np.asarray(batch.point.history).shape[1]
+            batch = batch._replace(point=batch.point._replace(
+                history=np.pad(np.asarray(batch.point.history), ((0, 0), (0, pad)))))
+            pool = mpm.make_pool(mpm.concatenate(batch), setup.capacity)
+        ms = mpm.initialize(_cast(pool, dtype), prm.mpm, cs.mpm)
+        F = sum(cs.face_sizes)
+        res = cp.Reservoirs(jnp.zeros((F, n), dtype), jnp.zeros((F, n, 3), dtype), jnp.zeros((F, n), dtype),
+                            jnp.full((F, n), -1, jnp.int32))
+        budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32))
+        zeros = jnp.zeros(n + d + 1, dtype)
+        maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
+        n_cols = len(self.history_columns(setup, sc))
+        state = State(U, *maps, mpm=ms, reservoirs=res, budget=budget, coupled=jnp.asarray(False), baseline=zeros,
+                      displaced=zeros, **timeloop.clock(n_samples, n_cols, dtype))
+        if setup.info["activation_overpressure"] == 0.0:
+            state = jax.jit(_activate, static_argnums=2)(state, prm, cs)
+        return state
+
+    @staticmethod
+    def _pressure(U, prm: Params, cs: cp.Static):
+        return cp.flat_primitives(U, prm.euler.eos, cs.euler)["pressure"].reshape(cs.euler.shape)
+
+    def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
+        cs = static.coupling
+        cfg, mcfg = cs.euler, cs.mpm
+        lay = params.layout
+        gauges = jnp.asarray(static.gauge_cells, jnp.int32)
+        d = len(cfg.shape)
+
+        def stable_dt(s):
+            dt = ek.stable_dt(s.U, params.euler, cfg)
+            dt = jnp.minimum(dt, jnp.where(s.coupled, mpm.stable_dt(s.mpm, params.mpm, mcfg), jnp.inf))
+            return jnp.where(s.budget.required > static.capacity, jnp.nan, dt)
+
+        def euler_only(s, dt):
+            s = s._replace(U=ek.step(s.U, dt, params.euler, cfg))
+            dp = cp.flat_primitives(s.U, params.euler.eos, cfg)["pressure"][lay.ring_cells] - params.reference_pressure
+            return jax.lax.cond(jnp.max(dp) > params.activation, lambda s: _activate(s, params, cs), lambda s: s, s)
+
+        def coupled(s, dt):
+            eos = params.euler.eos
+            prim = cp.flat_primitives(s.U, eos, cfg)
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs))
+            U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
+            U, res, budget = cp.receive(U, s.reservoirs, s.budget, T, prim, eos, cs, lay)
+            budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
+            U, ms, budget = cp.remove_leaving(U, ms, budget, cs, lay)
+            ms, res, budget = cp.feed(ms, res, budget, cp.flat_primitives(U, eos, cfg), eos, params.mpm, cs, lay)
+            rows, gas_mass = cp.gas_rows(ms.particles, cs)
+            return s._replace(U=cp.fictitious(U, rows, gas_mass, lay), mpm=ms, reservoirs=res, budget=budget)
+
+        def step(s, dt):
+            new = jax.lax.cond(s.coupled, coupled, euler_only, s, dt)
+            dp = self._pressure(self._view(new, cs, lay), params, cs) - params.reference_pressure
+            return new._replace(**blast_maps.update(_maps(new), dp, s.t, dt, params.arrival_threshold)._asdict())
+
+        def history_row(s):
+            P = s.mpm.particles
+            total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, lay, cs)
+            account = total + s.budget.boundary_out
+            scale = jnp.where(s.coupled, jnp.abs(s.baseline), 1.0)
+            n = cfg.n_materials
+            mass_residual = jnp.where(s.coupled, (jnp.sum(account[:n]) - jnp.sum(s.baseline[:n]))
+                                      / jnp.sum(scale[:n]), 0.0)
+            energy_residual = jnp.where(s.coupled, (account[-1] - s.baseline[-1]) / scale[-1], 0.0)
+            U = self._view(s, cs, lay)
+            prim = cp.flat_primitives(U, params.euler.eos, cfg)
+            row = [s.t, s.coupled.astype(s.t.dtype), jnp.sum(P.active).astype(s.t.dtype),
+                   jnp.sum(euler[:n]), jnp.sum(particles[:n]), structure, jnp.sum(reservoirs[:n]),
+                   jnp.sum(s.budget.boundary_out[:n]), mass_residual,
+                   euler[-1], particles[-1], reservoirs[-1], s.budget.boundary_out[-1], s.budget.pressure_transfer[-1],
+                   energy_residual]
+            row += list(total[n:n + d])
+            nst = cs.n_structure
+            if nst:
+                disp = jnp.linalg.norm(P.x[:nst] - params.structure_x0, axis=1)
+                row += [jnp.max(disp), jnp.max(P.point.damage[:nst]), jnp.max(P.point.plastic_strain[:nst])]
+            flat = [prim["pressure"][gauges] - params.reference_pressure, prim["rho"][gauges]]
+            flat += [prim["velocity"][k][gauges] for k in range(d)]
+            return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])
+
+        return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
+                                  stable_dt=stable_dt, step=step, history_row=history_row)
+
+    @staticmethod
+    def _view(s: State, cs: cp.Static, lay: cp.Layout):
+        rows, gas_mass = cp.gas_rows(s.mpm.particles, cs)
+        return jnp.where(s.coupled, cp.view(s.U, rows, gas_mass, lay), s.U)
+
+    def history_columns(self, setup: problem.Setup, sc: CfdmpScenario) -> tuple:
+        nd = setup.euler.grid.ndim
+        kg, J, mom = ("kg", "J", "kg*m/s") if nd == 3 else (("kg/m", "J/m", "kg*m/s/m") if nd == 2 else
+                                                            ("kg/m^2", "J/m^2", "kg*m/s/m^2"))
+        cols = [("time", "s"), ("coupled", "1"), ("particles", "1"), ("mass_euler", kg), ("mass_gas_particles", kg),
+                ("mass_structures", kg), ("mass_reservoirs", kg), ("mass_boundary_out", kg),
+                ("mass_budget_residual", "1"), ("energy_euler", J), ("energy_particles", J),
+                ("energy_reservoirs", J), ("energy_boundary_out", J), ("energy_pressure_transfer", J),
+                ("energy_budget_residual", "1")]
+        cols += [(f"momentum_{a}", mom) for a in AXES[:nd]]
+        if setup.info["structure_particles"]:
+            cols += [("structure_max_displacement", "m"), ("structure_max_damage", "1"),
+                     ("structure_max_plastic_strain", "1")]
+        for k in range(len(setup.euler.gauges)):
+            cols += [(f"gauge{k}_overpressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
+            cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:nd]]
+        return tuple(cols)
+
+    def snapshot(self, state: State, setup: problem.Setup) -> Grid:
+        """The viewed grid: Eulerian cells, and the box cells beyond the bridges from the particles
+        (cells without gas, inside structures, are NaN); ``region`` 0 Eulerian, 1 bridge, 2 particles."""
+        cs = self._static(setup, 0).coupling
+        prm = self.params(setup, np.asarray(state.U).dtype)
+        st = jax.tree_util.tree_map(jnp.asarray, state)
+        rows, gas_mass = cp.gas_rows(st.mpm.particles, cs)
+        U = jnp.where(st.coupled, cp.view(st.U, rows, gas_mass, prm.layout), st.U)
+        prim = {k: np.asarray(v) for k, v in ek.primitives(U, prm.euler, cs.euler).items()}
+        empty = np.asarray(st.coupled & prm.layout.fictitious & ~(gas_mass > 0.0))
+        e = setup.euler
+
+        def masked(a):
+            return np.where(empty if a.ndim == empty.ndim else empty[..., None], np.nan, a)
+
+        fields = {"density": prim["rho"], "pressure": prim["pressure"],
+                  "velocity": np.moveaxis(prim["velocity"], 0, -1), "internal_energy": prim["internal_energy"],
+                  "sound_speed": prim["sound_speed"]}
+        if len(e.materials) == 2:
+            fields["products_fraction"] = prim["products_fraction"]
+        fields = {k: masked(v) for k, v in fields.items()}
+        arrival = np.asarray(state.arrival)
+        fields.update(peak_overpressure=np.asarray(state.peak),
+                      arrival_time=np.where(np.isfinite(arrival), arrival, np.nan),
+                      positive_impulse=np.asarray(state.impulse),
+                      positive_duration=np.asarray(blast_maps.duration(_maps(state), state.t)),
+                      region=np.where(setup.outside, 0, np.where(setup.fictitious, 2, 1)).astype(float))
+        g = e.grid
+        edges = tuple(lo + np.arange(n + 1) * g.dx for lo, n in zip(g.lower, g.shape))
+        return Grid(edges=edges, cell_fields=fields)
+
+    def locate_fault(self, state: State, setup: problem.Setup) -> str:
+        budget = state.budget
+        if int(budget.required) > setup.capacity:
+            return (f"particle pool capacity {setup.capacity} is too small: the bridge needed "
+                    f"{int(budget.required)} active particles; set numerics.capacity >= {int(budget.required)}")
+        cs = self._static(setup, 0).coupling
+        prm = self.params(setup, np.asarray(state.U).dtype)
+        U = jnp.asarray(state.U)
+        flat = int(ek.first_bad_cell(U, prm.euler, cs.euler))
+        g = setup.euler.grid
+        if flat >= 0:
+            idx = np.unravel_index(flat, g.shape)
+            centre = ", ".join(f"{a} = {g.lower[k] + (i + 0.5) * g.dx:.6g} m" for k, (a, i) in
+                               enumerate(zip(AXES, idx)))
+            where = "a fictitious cell (from the particles)" if setup.fictitious[idx] else "an Eulerian cell"
+            return f"cell {tuple(int(i) for i in idx)} at {centre}, {where}"
+        ms = jax.tree_util.tree_map(jnp.asarray, state.mpm)
+        k = int(mpm.first_fault(ms, cs.mpm))
+        if k >= 0:
+            x = np.asarray(state.mpm.particles.x)[k, :g.ndim]
+            name = setup.materials[int(state.mpm.particles.material[k])]
+            return f"particle {k} ({name}) at {x.tolist()} m (non-finite, non-positive density or off the grid)"
+        return "the time step collapsed (fastest signal in the Eulerian cells or the particles)"
+
+    def summary(self, sc: CfdmpScenario, setup: problem.Setup, hist: dict, state: State) -> dict:
+        e = setup.euler
+        t = float(state.t)
+        gauges = []
+        for pos, cell in zip(e.gauges, e.gauge_cells):
+            arrival, end = float(state.arrival[cell]), float(state.end[cell])
+            region = "euler" if setup.outside[cell] else ("particles" if setup.fictitious[cell] else "bridge")
+            gauges.append({"position": [float(v) for v in pos], "region": region,
+                           "peak_overpressure": float(state.peak[cell]), "impulse": float(state.impulse[cell]),
+                           "arrival_time": arrival if np.isfinite(arrival) else None,
+                           "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None})
+        coupled = np.asarray(hist["coupled"]) > 0.5
+        n = len(e.materials)
+        nd = e.grid.ndim
+        baseline = np.asarray(state.baseline)
+        out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
+               "dx": e.grid.dx, "bridge_cells": setup.info["bridge_cells"],
+               "coupled_faces": setup.info["coupled_faces"],
+               "activation_time": float(hist["time"][np.argmax(coupled)]) if coupled.any() else None,
+               "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,
+               "budget": {
+                   "accounts": "Eulerian-only cells + particles (gas and structures) + bridge reservoirs + what "
+                               "left through the domain boundary, against their sum at activation",
+                   "mass_residual_relative": float(hist["mass_budget_residual"][-1]),
+                   "max_mass_residual_relative": float(np.max(np.abs(hist["mass_budget_residual"]))),
+                   "energy_residual_relative": float(hist["energy_budget_residual"][-1]),
+                   "energy_pressure_transfer": float(hist["energy_pressure_transfer"][-1]),
+                   "mass_at_activation": float(baseline[:n].sum()), "energy_at_activation": float(baseline[-1]),
+                   "mass_boundary_out": float(hist["mass_boundary_out"][-1]),
+                   "mass_in_reservoirs": float(hist["mass_reservoirs"][-1]),
+                   "displaced_by_structures": {"mass": float(np.asarray(state.displaced)[:n].sum()),
+                                               "energy": float(np.asarray(state.displaced)[-1])}},
+               "gauges": gauges}
+        if setup.info["structure_particles"]:
+            P = state.mpm.particles
+            nst = setup.info["structure_particles"]
+            dmg = np.asarray(P.point.damage)[:nst]
+            vol = np.asarray(P.mass)[:nst] / np.asarray(P.point.density)[:nst]
+            x = np.asarray(P.x)[:nst, :nd]
+            damaged = dmg >= 0.5
+            out["structures"] = {
+                "max_displacement": float(hist["structure_max_displacement"][-1]),
+                "max_damage": float(dmg.max()), "max_plastic_strain": float(hist["structure_max_plastic_strain"][-1]),
+                "damaged_volume": float(vol[damaged].sum()), "damaged_fraction": float(vol[damaged].sum() / vol.sum()),
+                "damaged_extent": ([[float(v) for v in x[damaged].min(axis=0)], [float(v) for v in x[damaged].max(axis=0)]]
+                                   if damaged.any() else None)}
+        return out
+
+    def plots(self, folder: Path, sc: CfdmpScenario, setups: list, histories: list[dict], members: list[dict],
+              finals: list) -> None:
+        """Gauge overpressures, the final pressure field, and the budget's mass residual."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from blastfsi.plotting.fields import plot_pressure_field
+        from blastfsi.plotting.histories import gauge_histories
+
+        folder.mkdir(parents=True, exist_ok=True)
+        if sc.output.gauges:
+            gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+        grid = finals[0]
+        plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
+                            grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s")
+        h = histories[0]
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")
+        ax.plot(h["time"] * 1e3, h["energy_budget_residual"], label="energy")
+        ax.set_xlabel("time [ms]"), ax.set_ylabel("budget residual (relative)"), ax.legend(), ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(folder / "budget.png", dpi=120)
+        plt.close(fig)
+
+
+METHOD = register(Cfdmp())
+
+
+
+def _activate(s: State, params: Params, cs: cp.Static) -> State:
+    """The coupling starts: the box's gas becomes particles and the budget's baseline is taken; the gas
+    of box cells that did not become particles (inside structures) is booked as ``displaced``."""
+    lay = params.layout
+    prim = cp.flat_primitives(s.U, params.euler.eos, cs.euler)
+    ms, required = cp.activate(s.U, s.mpm, prim, params.euler.eos, params.mpm, cs, lay)
+    box_gas = system_totals(s.U, s.mpm.particles, s.reservoirs, lay._replace(outside=~lay.outside), cs)[1]
+    created = (system_totals(s.U, ms.particles, s.reservoirs, lay, cs)[2]
+               - system_totals(s.U, s.mpm.particles, s.reservoirs, lay, cs)[2])
+    rows, gas_mass = cp.gas_rows(ms.particles, cs)
+    U = cp.fictitious(s.U, rows, gas_mass, lay)
+    baseline = system_totals(U, ms.particles, s.reservoirs, lay, cs)[0]
+    budget = s.budget._replace(required=jnp.maximum(s.budget.required, required.astype(jnp.int32)))
+    return s._replace(U=U, mpm=ms, budget=budget, coupled=jnp.asarray(True), baseline=baseline,
+                      displaced=box_gas - created)

@@ -1,0 +1,93 @@
+"""Scenario schema of the coupled Eulerian-MPM method (``method = "cfdmp"``, seed 000 Sec. 3).
+
+The whole domain is the Eulerian grid of the ``euler`` method (same ``domain``,
+``boundaries``, ``grid``, ``initial`` and ``materials`` keys); ``[mpm_region]``
+is an axis-aligned box of whole cells inside it where the gas becomes
+particles and ``[[structures]]`` (the ``mpm`` method's bodies) stand. Every face
+of the box that is not on the domain boundary borders the Eulerian region and
+carries a bridge ``bridge_cells`` wide inside the box (000 Sec. 3.1).
+"""
+from __future__ import annotations
+
+from typing import Literal, Optional
+
+from pydantic import Field, model_validator
+
+from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial
+from blastfsi.mpm.scenario import Body
+from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
+from blastfsi.scenario import Numerics as SharedNumerics
+from blastfsi.scenario import ScenarioBase, Strict
+
+# Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
+# read when updating the bridge: the fictitious cells of 000 Eqs. (31)-(36). Structures stay beyond them.
+FICTITIOUS_DEPTH = 4
+
+
+class MPMRegion(Strict):
+    """The MPM box, its bridge and the activation of the coupling."""
+
+    lower: list[float] = Field(min_length=1, max_length=3, description="lower corner [m] (on cell faces)")
+    upper: list[float] = Field(min_length=1, max_length=3, description="upper corner [m] (on cell faces)")
+    bridge_cells: int = Field(5, ge=1, le=50, description="bridge width w [cells] on every face bordering the "
+                                                          "Eulerian region (000 Sec. 3.1)")
+    activation_overpressure: float = Field(0.0, ge=0.0, description=(
+        "overpressure [Pa] in the Eulerian cells bordering the box that starts the coupling (the gas in the box "
+        "then becomes particles); 0: coupled from the start"))
+    gas_particles_per_cell: int = Field(2, ge=1, le=4, description="gas particles per cell and direction")
+
+    @model_validator(mode="after")
+    def _box(self):
+        if len(self.lower) != len(self.upper):
+            raise ValueError("mpm_region.lower and mpm_region.upper need the same number of coordinates")
+        for ax, lo, hi in zip(AXES, self.lower, self.upper):
+            if not hi > lo:
+                raise ValueError(f"mpm_region.upper[{ax}] ({hi}) must exceed mpm_region.lower[{ax}] ({lo})")
+        return self
+
+
+class CfdmpNumerics(SharedNumerics):
+    scheme: Literal["lax-wendroff", "hllc-muscl"] = Field("hllc-muscl", description="Eulerian scheme")
+    cfl: float = Field(0.4, gt=0.0, le=1.0, description="Courant number of both solvers (one common step)")
+    shape: Literal["linear", "gimp"] = Field("gimp", description="MPM shape functions")
+    q_quadratic: float = Field(DEFAULT_QUADRATIC, ge=0.0, le=10.0, description="MPM bulk viscosity C_q")
+    q_linear: float = Field(DEFAULT_LINEAR, ge=0.0, le=10.0, description="MPM bulk viscosity C_l")
+    capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
+        "particle pool size (default: structures + 4 x the gas particles of the box)"))
+
+
+class CfdmpScenario(ScenarioBase):
+    method: Literal["cfdmp"] = "cfdmp"
+    domain: Domain
+    boundaries: Boundaries = Boundaries()
+    grid: Grid
+    initial: Initial
+    mpm_region: MPMRegion
+    structures: list[Body] = Field(default_factory=list, max_length=100)
+    materials: dict[str, dict[str, float]] = Field(
+        default_factory=dict, description="per-material overrides of library constants")
+    numerics: CfdmpNumerics = CfdmpNumerics()
+    output: EulerOutput = EulerOutput()
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        d, box = self.domain, self.mpm_region
+        nd = d.ndim
+        if d.geometry != "cartesian":
+            raise ValueError(f"domain.geometry: cfdmp runs on Cartesian grids (1D, 2D plane strain, 3D), got "
+                             f"{d.geometry!r}")
+        if len(box.lower) != nd:
+            raise ValueError(f"mpm_region.lower: expected {nd} coordinate(s), got {len(box.lower)}")
+        for ax, lo, hi, dlo, dhi in zip(AXES, box.lower, box.upper, d.lower, d.upper):
+            if lo < dlo or hi > dhi:
+                raise ValueError(f"mpm_region: the box [{lo:g}, {hi:g}] m along {ax} leaves the domain "
+                                 f"[{dlo:g}, {dhi:g}] m")
+        if all(lo == dlo and hi == dhi for lo, hi, dlo, dhi in zip(box.lower, box.upper, d.lower, d.upper)):
+            raise ValueError("mpm_region covers the whole domain: no Eulerian region is left (use method = 'mpm')")
+        for kinds, ax in zip((self.boundaries.x, self.boundaries.y, self.boundaries.z), AXES[:nd]):
+            if "periodic" in kinds:
+                raise ValueError(f"boundaries.{ax}: periodic faces are not supported by cfdmp")
+        for k, b in enumerate(self.structures):
+            if b.prescribed:
+                raise ValueError(f"structures[{k}].prescribed: structures are not driven bodies")
+        return self

@@ -1,0 +1,268 @@
+"""Initial data and the coupling layout of the ``cfdmp`` method (host side, NumPy; seed 000 Sec. 3).
+
+Composition, not duplication: the Eulerian part is :func:`blastfsi.problems.euler.build`
+on the same domain, grid and initial condition; the structures are
+:func:`blastfsi.problems.mpm.build` on the MPM background grid. This module adds
+the coupling layout (cell indices in the Eulerian grid, C order):
+
+* the MPM box ``[box_lo, box_hi)`` in cells; a face of it not on the domain
+  boundary is *coupled*; the MPM background grid is the box plus one ring of
+  cells outward on coupled sides (their centres are the Eulerian "particles" of
+  000 Eqs. 37-39 for the interface nodes on the box faces);
+* ``fictitious``: box cells beyond the bridge, whose Eulerian values come from
+  the particles (000 Eqs. 31-36); ``outside``: the Eulerian-only cells;
+* per face cell of every coupled face (lateral cells of the box face): the
+  Eulerian cell outside, the bridge cell inside, the index of the face in the
+  scheme's transfer arrays, and the direction into the box;
+* the gas lattice of the box (``gas_particles_per_cell`` per cell and
+  direction, points inside structures left out) that the gas becomes at activation.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from blastfsi import mpm
+from blastfsi.cfdmp.scenario import FICTITIOUS_DEPTH, CfdmpScenario
+from blastfsi.constitutive import get as get_model
+from blastfsi.euler.scenario import AXES, EulerScenario
+from blastfsi.materials import MaterialError, lookup
+from blastfsi.mpm.scenario import MPMScenario
+from blastfsi.problems import euler as euler_problem
+from blastfsi.problems import mpm as mpm_problem
+from blastfsi.scenario import ScenarioError
+
+CAPACITY_FACTOR = 4  # default pool: structures + 4 x the box's gas particles (compression by the blast)
+
+
+@dataclass(frozen=True)
+class Face:
+    """One coupled face of the box: axis, side (0 lower, 1 upper) and its face cells."""
+
+    axis: int
+    side: int
+    plane: int  # index of the face plane among the faces of that axis (0 .. shape[axis])
+    lateral: tuple  # index arrays of the face cells' lateral positions (one per other axis)
+    outside: np.ndarray  # flat Eulerian index of the cell outside the box
+    bridge: np.ndarray  # flat Eulerian index of the bridge cell inside
+    centre: np.ndarray  # (F, ndim) centre of each face cell's face [m]
+
+    @property
+    def into_box(self) -> float:
+        """+1 when the face's positive direction points into the box (lower face), -1 otherwise."""
+        return 1.0 if self.side == 0 else -1.0
+
+
+@dataclass(frozen=True)
+class Setup:
+    euler: euler_problem.Setup
+    grid: mpm.Grid  # MPM background grid
+    materials: tuple  # MPM material names (structures first, then the gases)
+    models: tuple
+    model_params: tuple
+    gas_material: tuple  # MPM material index of each Eulerian material (products, air)
+    structures: mpm.Particles  # active structure particles (host batch), may be empty
+    body: np.ndarray  # body index of each structure particle
+    capacity: int
+    box_lo: tuple
+    box_hi: tuple
+    faces: tuple  # Face per coupled face
+    fictitious: np.ndarray  # bool mask over the Eulerian grid
+    parked: np.ndarray  # bool: fictitious cells beyond the FICTITIOUS_DEPTH the scheme reads
+    outside: np.ndarray  # bool mask over the Eulerian grid: the Eulerian-only region
+    ring_cells: np.ndarray  # flat Eulerian indices of the ring cells (outside the box, inside the MPM grid)
+    ring_x: np.ndarray  # (n, 3) their centres
+    gas_x: np.ndarray  # (n_gas, 3) gas lattice positions
+    gas_volume: np.ndarray  # (n_gas,)
+    gas_half: np.ndarray  # (n_gas, 3) GIMP half-sizes
+    gas_cell: np.ndarray  # (n_gas,) flat Eulerian cell of each lattice point
+    boundary_faces: tuple  # per axis (lower, upper) bool masks over that face's cells: Eulerian-only cells
+    info: dict = field(default_factory=dict)
+
+    @property
+    def cells(self) -> int:
+        return self.euler.cells
+
+    @property
+    def gauges(self):
+        return self.euler.gauges
+
+
+def _cell_index(sc: CfdmpScenario, value: float, ax: int, dx: float, key: str) -> int:
+    n = (value - sc.domain.lower[ax]) / dx
+    if abs(n - round(n)) > 1e-6:
+        raise ScenarioError(f"{key}[{AXES[ax]}] = {value:g} m must lie on a cell face (cells of {dx:g} m from "
+                            f"domain.lower[{AXES[ax]}] = {sc.domain.lower[ax]:g} m)")
+    return int(round(n))
+
+
+def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
+    data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
+                                  "time", "output"})
+    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": sc.numerics.cfl,
+                                          "precision": sc.numerics.precision})
+    return EulerScenario.model_validate(data)
+
+
+def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
+    """(names, models, params, particles, body) of the structures on the MPM grid."""
+    if not sc.structures:
+        return [], [], [], None, np.zeros(0, int)
+    msc = MPMScenario.model_validate({
+        "method": "mpm", "name": sc.name, "time": {"end": sc.time.end},
+        "grid": {"lower": list(grid.origin), "upper": list(grid.upper), "cells": grid.cells[0],
+                 "boundaries": dict(zip(AXES, faces_kinds))},
+        "bodies": [b.model_dump() for b in sc.structures], "materials": sc.materials,
+        "numerics": {"shape": sc.numerics.shape}})
+    try:
+        s = mpm_problem.build(msc)
+    except ScenarioError as err:
+        raise ScenarioError(str(err).replace("bodies[", "structures[")) from None
+    n = s.body.size
+    batch = mpm.Particles(*[np.asarray(a)[:n] if not isinstance(a, tuple) else type(a)(*[np.asarray(b)[:n] for b in a])
+                            for a in s.particles])
+    return list(s.materials), list(s.models), list(s.model_params), batch, s.body
+
+
+def build(sc: CfdmpScenario) -> Setup:
+    esetup = euler_problem.build(_euler_scenario(sc))
+    g = esetup.grid
+    nd, dx, shape = g.ndim, g.dx, g.shape
+    box = sc.mpm_region
+    lo = tuple(_cell_index(sc, v, ax, dx, "mpm_region.lower") for ax, v in enumerate(box.lower))
+    hi = tuple(_cell_index(sc, v, ax, dx, "mpm_region.upper") for ax, v in enumerate(box.upper))
+    coupled = [(lo[ax] > 0, hi[ax] < shape[ax]) for ax in range(nd)]
+    w = box.bridge_cells
+    for ax in range(nd):
+        need = w * sum(coupled[ax]) + FICTITIOUS_DEPTH
+        if any(coupled[ax]) and hi[ax] - lo[ax] < need:
+            raise ScenarioError(f"mpm_region: the box is {hi[ax] - lo[ax]} cells wide along {AXES[ax]}, too narrow "
+                                f"for bridges of mpm_region.bridge_cells = {w} on {sum(coupled[ax])} face(s) plus "
+                                f"{FICTITIOUS_DEPTH} fictitious cells; need >= {need} cells")
+    g_lo = tuple(lo[ax] - int(coupled[ax][0]) for ax in range(nd))
+    g_hi = tuple(hi[ax] + int(coupled[ax][1]) for ax in range(nd))
+    kinds = []
+    for ax in range(nd):
+        pair = []
+        for side in (0, 1):
+            face = getattr(sc.boundaries, AXES[ax])[side]
+            pair.append("free" if coupled[ax][side] or face == "outflow" else "slip")
+        kinds.append(tuple(pair))
+    grid = mpm.Grid(origin=tuple(g.lower[ax] + g_lo[ax] * dx for ax in range(nd)), cell_size=dx,
+                    cells=tuple(g_hi[ax] - g_lo[ax] for ax in range(nd)), boundaries=tuple(kinds))
+
+    # the bridge and fictitious cells; structures must stay beyond the cells the bridge reads
+    idx = np.indices(shape)
+    in_box = np.ones(shape, bool)
+    core = np.ones(shape, bool)  # box cells beyond the bridges
+    clear = np.ones(shape, bool)  # box cells beyond bridge + fictitious depth
+    for ax in range(nd):
+        i = idx[ax]
+        in_box &= (i >= lo[ax]) & (i < hi[ax])
+        c_lo, c_hi = lo[ax] + w * coupled[ax][0], hi[ax] - w * coupled[ax][1]
+        core &= (i >= c_lo) & (i < c_hi)
+        clear &= (i >= c_lo + FICTITIOUS_DEPTH * coupled[ax][0]) & (i < c_hi - FICTITIOUS_DEPTH * coupled[ax][1])
+
+    names, models, params, structures, body = _structures(sc, grid, kinds)
+    box_lower = np.array([g.lower[ax] + lo[ax] * dx for ax in range(nd)])
+    box_upper = np.array([g.lower[ax] + hi[ax] * dx for ax in range(nd)])
+    if structures is not None:
+        xs = np.asarray(structures.x)[:, :nd]
+        cells = tuple(np.clip(np.floor((xs[:, ax] - g.lower[ax]) / dx).astype(int), 0, shape[ax] - 1)
+                      for ax in range(nd))
+        outside_box = np.any((xs < box_lower) | (xs > box_upper), axis=1)
+        near = ~clear[cells] | outside_box
+        if near.any():
+            k = int(body[np.argmax(near)])
+            raise ScenarioError(f"structures[{k}] crosses the bridge or its {FICTITIOUS_DEPTH} fictitious cells "
+                                f"(particle at {xs[np.argmax(near)].tolist()} m): keep structures inside "
+                                f"mpm_region and at least {w + FICTITIOUS_DEPTH} cells from every face bordering "
+                                "the Eulerian region")
+
+    # gases: the Eulerian materials as fluid particles
+    gas_material = []
+    for name in esetup.materials:
+        if name not in names:
+            try:
+                mat = lookup(name, sc.materials.get(name), field=f"materials.{name}")
+            except MaterialError as err:
+                raise ScenarioError(str(err)) from None
+            model = get_model(mpm_problem.model_name(mat))
+            names.append(name)
+            models.append(model)
+            params.append(model.params_from(mat))
+        gas_material.append(names.index(name))
+
+    # gas lattice of the box, points inside structures left out
+    ppc = box.gas_particles_per_cell
+    gx, gvol, ghalf = mpm.lattice(grid, box_lower, box_upper, ppc)
+    keep = np.ones(len(gvol), bool)
+    for b in sc.structures:
+        keep &= ~mpm_problem.inside_body(b, gx, grid)
+    gx, gvol, ghalf = gx[keep], gvol[keep], ghalf[keep]
+    gcell = np.ravel_multi_index(tuple(np.clip(np.floor((gx[:, ax] - g.lower[ax]) / dx).astype(int), 0,
+                                               shape[ax] - 1) for ax in range(nd)), shape)
+    n_struct = 0 if structures is None else int(np.asarray(structures.mass).size)
+    capacity = sc.numerics.capacity or n_struct + CAPACITY_FACTOR * gvol.size
+    if capacity < n_struct + gvol.size:
+        raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
+                            f"of the MPM box ({gvol.size}) need {n_struct + gvol.size} particles; set "
+                            f"numerics.capacity >= {n_struct + gvol.size} (the bridge creates more as gas flows in)")
+
+    # coupled faces and their face cells
+    faces = []
+    for ax in range(nd):
+        for side in (0, 1):
+            if not coupled[ax][side]:
+                continue
+            plane = lo[ax] if side == 0 else hi[ax]
+            others = [a for a in range(nd) if a != ax]
+            lat = np.meshgrid(*[np.arange(lo[a], hi[a]) for a in others], indexing="ij")
+            lat = tuple(x.ravel() for x in lat) if others else ()
+            n_f = lat[0].size if others else 1
+
+            def flat(i_axis):
+                full = [None] * nd
+                full[ax] = np.full(n_f, i_axis)
+                for a, x in zip(others, lat):
+                    full[a] = x
+                return np.ravel_multi_index(tuple(full), shape)
+
+            centre = np.zeros((n_f, nd))
+            centre[:, ax] = g.lower[ax] + plane * dx
+            for a, x in zip(others, lat):
+                centre[:, a] = g.lower[a] + (x + 0.5) * dx
+            out_i, in_i = (plane - 1, plane) if side == 0 else (plane, plane - 1)
+            faces.append(Face(ax, side, plane, tuple(x - lo[a] for a, x in zip(others, lat)), flat(out_i),
+                              flat(in_i), centre))
+
+    # ring cells: MPM-grid cells outside the box
+    ring = np.ones(shape, bool)
+    for ax in range(nd):
+        ring &= (idx[ax] >= g_lo[ax]) & (idx[ax] < g_hi[ax])
+    ring &= ~in_box
+    ring_cells = np.flatnonzero(ring)
+    ring_x = np.zeros((ring_cells.size, 3))
+    for ax, i in enumerate(np.unravel_index(ring_cells, shape)):
+        ring_x[:, ax] = g.lower[ax] + (i + 0.5) * dx
+
+    # domain faces whose adjacent cell is Eulerian-only (their transfers are the run's boundary exchange)
+    boundary_faces = []
+    for ax in range(nd):
+        pair = []
+        for i in (0, shape[ax] - 1):
+            pair.append(np.take(~in_box, i, axis=ax))
+        boundary_faces.append(tuple(pair))
+
+    info = dict(esetup.info)
+    info.update(mpm_cells=list(grid.cells), mpm_origin=list(grid.origin), box_cells=[list(lo), list(hi)],
+                bridge_cells=w, coupled_faces=[f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
+                                               for f in faces],
+                structure_particles=n_struct, gas_particles=int(gvol.size), capacity=int(capacity),
+                mpm_materials=list(names), activation_overpressure=box.activation_overpressure,
+                gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape,
+                q=[sc.numerics.q_quadratic, sc.numerics.q_linear])
+    return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
+                 int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, gx, gvol, ghalf, gcell,
+                 tuple(boundary_faces), info)
