@@ -23,7 +23,7 @@ from blastfsi.cfdmp.scenario import CfdmpScenario
 from blastfsi.diagnostics import blast_maps
 from blastfsi.euler.method import GEOMETRY_CODE, SCHEME_CODE
 from blastfsi.euler.scenario import AXES
-from blastfsi.method import Grid, register
+from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm.method import VOIGT_TO_TENSOR
 from blastfsi.problems import cfdmp as problem
 
@@ -295,9 +295,10 @@ class Cfdmp:
             cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:nd]]
         return tuple(cols)
 
-    def snapshot(self, state: State, setup: problem.Setup) -> Grid:
-        """The viewed grid: Eulerian cells, and the box cells beyond the bridges from the particles
-        (cells without gas, inside structures, are NaN); ``region`` 0 Eulerian, 1 bridge, 2 particles."""
+    def snapshot(self, state: State, setup: problem.Setup) -> Coupled:
+        """The viewed grid (Eulerian cells, and the box cells beyond the bridges from the particles; cells
+        without gas, inside structures, are NaN; ``region`` 0 Eulerian, 1 bridge, 2 particles) and the
+        particles (gas and structures: pressure, stress, plastic strain, damage)."""
         cs = self._static(setup, 0).coupling
         prm = self.params(setup, np.asarray(state.U).dtype)
         st = jax.tree_util.tree_map(jnp.asarray, state)
@@ -324,7 +325,17 @@ class Cfdmp:
                       region=np.where(setup.outside, 0, np.where(setup.fictitious, 2, 1)).astype(float))
         g = e.grid
         edges = tuple(lo + np.arange(n + 1) * g.dx for lo, n in zip(g.lower, g.shape))
-        return Grid(edges=edges, cell_fields=fields)
+        P = state.mpm.particles
+        on = np.asarray(P.active)
+        stress = np.asarray(P.point.stress)[on]
+        nst = setup.info["structure_particles"]
+        points = {"pressure": -stress[:, :3].sum(axis=1) / 3.0, "density": np.asarray(P.point.density)[on],
+                  "velocity": np.asarray(P.v)[on, :g.ndim], "stress": stress[:, VOIGT_TO_TENSOR],
+                  "plastic_strain": np.asarray(P.point.plastic_strain)[on], "damage": np.asarray(P.point.damage)[on],
+                  "material": np.asarray(P.material)[on].astype(float),
+                  "structure": (np.arange(on.size) < nst)[on].astype(float)}
+        return Coupled(grid=Grid(edges=edges, cell_fields=fields),
+                       particles=Particles(positions=np.asarray(P.x)[on, :g.ndim], point_fields=points))
 
     def locate_fault(self, state: State, setup: problem.Setup) -> str:
         budget = state.budget
@@ -412,7 +423,7 @@ class Cfdmp:
         folder.mkdir(parents=True, exist_ok=True)
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
-        grid = finals[0]
+        grid = finals[0].grid
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
                             grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s")
         h = histories[0]

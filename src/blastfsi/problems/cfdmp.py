@@ -19,6 +19,7 @@ the coupling layout (cell indices in the Eulerian grid, C order):
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -98,10 +99,17 @@ def _cell_index(sc: CfdmpScenario, value: float, ax: int, dx: float, key: str) -
 
 
 def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
+    """The Eulerian part as an ``euler`` scenario. A charge's automatic remap time must also come before
+    the blast reaches the MPM box: its point nearest to the charge is added as a last gauge (dropped again
+    by :func:`build`)."""
     data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
                                   "time", "output"})
     data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": sc.numerics.cfl,
                                           "precision": sc.numerics.precision})
+    if sc.initial.kind == "charge" and sc.initial.remap_time is None:
+        centre = np.asarray(sc.initial.center or [0.0] * sc.domain.ndim, float)
+        nearest = np.clip(centre, sc.mpm_region.lower, sc.mpm_region.upper)
+        data["output"]["gauges"] = list(data["output"]["gauges"]) + [nearest.tolist()]
     return EulerScenario.model_validate(data)
 
 
@@ -112,7 +120,7 @@ def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
     msc = MPMScenario.model_validate({
         "method": "mpm", "name": sc.name, "time": {"end": sc.time.end},
         "grid": {"lower": list(grid.origin), "upper": list(grid.upper), "cells": grid.cells[0],
-                 "boundaries": dict(zip(AXES, faces_kinds))},
+                 "boundaries": {a: list(k) for a, k in zip(AXES, faces_kinds)}},
         "bodies": [b.model_dump() for b in sc.structures], "materials": sc.materials,
         "numerics": {"shape": sc.numerics.shape}})
     try:
@@ -126,7 +134,11 @@ def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
 
 
 def build(sc: CfdmpScenario) -> Setup:
-    esetup = euler_problem.build(_euler_scenario(sc))
+    esc = _euler_scenario(sc)
+    esetup = euler_problem.build(esc)
+    n_gauges = len(sc.output.gauges)
+    if len(esc.output.gauges) > n_gauges:  # drop the box's limit point
+        esetup = dataclasses.replace(esetup, gauges=esetup.gauges[:n_gauges], gauge_cells=esetup.gauge_cells[:n_gauges])
     g = esetup.grid
     nd, dx, shape = g.ndim, g.dx, g.shape
     box = sc.mpm_region
