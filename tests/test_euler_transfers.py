@@ -38,9 +38,18 @@ CASES = {  # shape, geometry, bc, materials: outflow, walls and a periodic axis,
     "2d": ((10, 8), euler.CARTESIAN, ((W, O), (P, P)), 2),
     "3d": ((5, 4, 4), euler.CARTESIAN, ((O, W), (P, P), (W, O)), 1),
     "spherical": ((12,), euler.SPHERICAL, ((A, O),), 2),
-    "axisymmetric": ((10, 8), euler.CYLINDRICAL, ((A, O), (W, O)), 2),
+    "axisymmetric": ((10, 8), euler.CYLINDRICAL, ((A, O), (W, O)), 1),
 }
-RUNS = [(scheme, case) for scheme in (euler.LAX_WENDROFF, euler.HLLC_MUSCL) for case in CASES]
+# compiles take 6-34 s each on the shared 2-core machine (step + recorded step): the default suite keeps the
+# 1D and 2D Cartesian cases of both schemes, the rest runs with -m slow
+SLOW = {(s, c) for s in (euler.LAX_WENDROFF, euler.HLLC_MUSCL) for c in ("3d", "spherical", "axisymmetric")}
+
+
+def runs(keep=lambda case: True):
+    """pytest parameters (scheme, case) of both schemes, the cases kept by keep(case)."""
+    return [pytest.param(scheme, case, marks=[pytest.mark.slow] if (scheme, case) in SLOW else [])
+            for scheme in (euler.LAX_WENDROFF, euler.HLLC_MUSCL) for case in CASES if keep(case)]
+
 
 step = jax.jit(euler.step, static_argnums=3)
 step_with_transfers = jax.jit(euler.step_with_transfers, static_argnums=3)
@@ -101,7 +110,7 @@ def scale(U, T, r):
     return max(np.abs(U[r]).max(), max(np.abs(t[r]).max() for t in T))
 
 
-@pytest.mark.parametrize("scheme, case", RUNS)
+@pytest.mark.parametrize("scheme, case", runs())
 def test_every_cell_changes_by_its_face_transfers(scheme, case):
     """U_new - U = sum over axes (g- T_low - g+ T_high) in every cell for every balanced row."""
     cfg, U, U_new, T, _ = run(scheme, case)
@@ -119,7 +128,7 @@ def test_every_cell_changes_by_its_face_transfers(scheme, case):
     assert max(np.abs(U_new[r] - U[r]).max() / scale(U, T, r) for r in balanced_rows(cfg)) > 1e-2  # a real step
 
 
-@pytest.mark.parametrize("scheme, case", RUNS)
+@pytest.mark.parametrize("scheme, case", runs())
 def test_sub_box_content_changes_by_content_through_its_faces(scheme, case):
     """Cut planes f along axis 0: the content of cells i < f (geometry.cell_volumes) changes by
     dx (face area) T summed over the sub-box's faces: in at face 0, out at the cut, and the
@@ -143,12 +152,16 @@ def test_sub_box_content_changes_by_content_through_its_faces(scheme, case):
     print(f"scheme {scheme} {case}: max cut-plane error / (scale x sub-box volume) = {worst:.2e}")
 
 
-@pytest.mark.parametrize("scheme, case", RUNS)
+@pytest.mark.parametrize("scheme, case", runs())
 def test_no_transfer_through_mirror_faces(scheme, case):
-    """At a wall, symmetry plane or axis the mirror ghost state makes the face velocity exactly 0:
-    no mass (nor energy, tangential momentum, products fraction) crosses; only the normal momentum
-    (pressure impulse) does."""
-    cfg, _, _, T, _ = run(scheme, case)
+    """At a wall, symmetry plane or axis the mirror ghost state makes the face velocity 0: no mass
+    (nor energy, tangential momentum, products fraction) crosses; only the normal momentum
+    (pressure impulse) does. Lax-Wendroff: exactly 0 (the corrector flux is a product with the
+    face velocity, which cancels exactly). HLLC: its flux w_L q v_L + w_R q v_R with v_R = -v_L
+    cancels exactly in IEEE arithmetic, but XLA:CPU may contract it into a fused multiply-add,
+    which leaves the rounding error of one product: below eps of the row's scale (exactly 0
+    with FMA disabled, XLA_FLAGS=--xla_cpu_max_isa=SSE4_2)."""
+    cfg, U, _, T, _ = run(scheme, case)
     lay = layout(cfg)
     checked = 0
     for a, pair in enumerate(cfg.bc):
@@ -156,14 +169,17 @@ def test_no_transfer_through_mirror_faces(scheme, case):
             if kind in (W, A):
                 f = side * cfg.shape[a]
                 wall = faces(T[a], a, f, f + 1)
-                rows = [r for r in range(lay.nvar) if r != lay.mom + a]
-                assert np.all(wall[rows] == 0.0), (a, side, np.abs(wall[rows]).max())
-                assert np.abs(wall[lay.mom + a]).max() > 0.0
+                for r in range(lay.nvar):
+                    if r == lay.mom + a:
+                        assert np.abs(wall[r]).max() > 0.0
+                        continue
+                    bound = 0.0 if scheme == euler.LAX_WENDROFF else np.finfo(float).eps * scale(U, T, r)
+                    assert np.abs(wall[r]).max() <= bound, (a, side, r, np.abs(wall[r]).max())
                 checked += 1
     assert checked > 0
 
 
-@pytest.mark.parametrize("scheme, case", [run for run in RUNS if P in sum(CASES[run[1]][2], ())])
+@pytest.mark.parametrize("scheme, case", runs(lambda case: (P, P) in CASES[case][2]))
 def test_periodic_faces_agree(scheme, case):
     """Faces 0 and n of a periodic axis are the same face: equal transfers."""
     cfg, U, _, T, _ = run(scheme, case)
@@ -174,7 +190,7 @@ def test_periodic_faces_agree(scheme, case):
         assert gap < PER_CELL * scale(U, T, r)
 
 
-@pytest.mark.parametrize("scheme, case", RUNS)
+@pytest.mark.parametrize("scheme, case", runs())
 def test_recording_leaves_the_step_bit_identical(scheme, case):
     """U_new of step_with_transfers equals euler.step's, bit for bit (both jitted on their own)."""
     _, _, U_new, _, U_step = run(scheme, case)

@@ -57,6 +57,8 @@ from blastfsi.euler.config import layout as row_layout
 from blastfsi.euler.mixture import cell_state, cold_terms, eos_rows
 from blastfsi.mpm.musl import wave_speed
 
+FEED_FRACTION = 1e-6  # smallest reservoir mass that feeds an inflow particle, in gas particles of the bridge cell
+
 
 class Layout(NamedTuple):
     """Traced arrays of the coupling layout (built by :mod:`blastfsi.problems.cfdmp`)."""
@@ -69,6 +71,7 @@ class Layout(NamedTuple):
     ring_idx: jnp.ndarray  # (S, R) MPM node indices of their stencils
     ring_w: jnp.ndarray  # (S, R) N_Ic
     ring_grad: jnp.ndarray  # (ndim, S, R) dN_Ic/dx
+    outflow_area: jnp.ndarray  # (num_nodes, ndim) -n A on MPM nodes of box faces on outflow domain faces, else 0
     face_out: jnp.ndarray  # (F,) flat Eulerian index of the cell outside each face cell
     face_in: jnp.ndarray  # (F,) flat Eulerian index of the bridge cell
     face_centre: jnp.ndarray  # (F, 3) centre of each face cell's face [m]
@@ -216,8 +219,24 @@ def view(U, rows, gas_mass, layout: Layout):
     return jnp.where(layout.fictitious & (gas_mass > 0.0), rows, U)
 
 
-def interface_source(prim_flat: dict, layout: Layout, static: Static) -> mpm.musl.NodalSource:
-    """000 Eqs. (37)-(39): the ring cells as particles of mass rho V and stress -p I."""
+def outflow_traction(P: mpm.Particles, layout: Layout, static: Static):
+    """Nodal force -p_I A n on the nodes of box faces that lie on an outflow face of the domain, p_I the
+    mass-weighted pressure of the gas particles around the node: the gas beyond the face is taken to continue
+    at the same pressure (zero gradient, like the Eulerian outflow ghost cells) instead of a vacuum, which a
+    free MPM face would be."""
+    cfg = static.mpm
+    slot = _gas_index(static, P.material)
+    m = jnp.where(P.active & (slot >= 0), P.mass, 0.0)
+    p = -(P.point.stress[:, 0] + P.point.stress[:, 1] + P.point.stress[:, 2]) / 3.0 + P.q
+    idx, w, _ = mpm.stencil(P.x, P.half_size, cfg.grid, cfg.shape)
+    nodal = mpm.musl.particle_to_grid(idx, [w * m, w * (m * p)], cfg.grid.num_nodes, cfg.combined_scatter)
+    p_node = jnp.where(nodal[:, 0] > 0.0, nodal[:, 1] / jnp.where(nodal[:, 0] > 0.0, nodal[:, 0], 1.0), 0.0)
+    return p_node[:, None] * layout.outflow_area
+
+
+def interface_source(prim_flat: dict, layout: Layout, static: Static, P: mpm.Particles) -> mpm.musl.NodalSource:
+    """000 Eqs. (37)-(39): the ring cells as particles of mass rho V and stress -p I; plus the outflow
+    traction of :func:`outflow_traction` on box faces that lie on outflow faces of the domain."""
     grid = static.mpm.grid
     d = grid.dim
     V = cell_measure(static.euler)
@@ -233,7 +252,7 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static) -> mpm.mus
     mass = scatter(w * (rho * V))
     mom = jnp.stack([scatter(w * (rho * V * vel[i])) for i in range(d)], axis=1)
     force = jnp.stack([scatter(layout.ring_grad[i] * (p * V)) for i in range(d)], axis=1)
-    return mpm.musl.NodalSource(mass, mom, force)
+    return mpm.musl.NodalSource(mass, mom, force + outflow_traction(P, layout, static))
 
 
 def face_transfers(T, static: Static):
@@ -286,7 +305,8 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     e_k = phase_energy(rho_k, p, eos_rows(eos, n))
     ke = 0.5 * jnp.sum(u * u, axis=0)
     carried_mom = jnp.sum(m_k, axis=0)[None] * u
-    carried_e = jnp.stack([m_k[k] * (e_k[k] + ke) for k in range(n)])  # (n, F)
+    carried_e = jnp.stack([jnp.where(m_k[k] != 0.0, m_k[k] * (e_k[k] + ke), 0.0) for k in range(n)])  # (n, F)
+    # (a material absent from the donor has no phase density: its zero transfer must not carry 0 x NaN)
     pressure = jnp.concatenate([jnp.sum(tf[lay.mom:lay.mom + d] - carried_mom, axis=1),
                                 jnp.sum(tf[lay.energy] - jnp.sum(carried_e, axis=0))[None]])
     m_in = jnp.where(inflow, m_k, 0.0)
@@ -295,7 +315,7 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
                        momentum=res.momentum + (m_in[:, None, :] * u3[None]).transpose(2, 0, 1),
                        energy=res.energy + jnp.where(inflow, carried_e, 0.0).T)
     out = ~inflow  # m_k <= 0: the Eulerian cell received -m_k; take the convective part back
-    vol_k = jnp.stack([jnp.where(out, m_k[k] / rho_k[k], 0.0) for k in range(n)])
+    vol_k = jnp.stack([jnp.where(out & (m_k[k] != 0.0), m_k[k] / rho_k[k], 0.0) for k in range(n)])
     U = _add_to_cells(U, layout.face_out, jnp.where(out, m_k, 0.0), jnp.where(out, carried_mom, 0.0),
                       jnp.where(out, jnp.sum(carried_e, axis=0), 0.0), vol_k, lay, V)
     return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
@@ -353,11 +373,12 @@ def remove_leaving(U, state: mpm.State, budget: Budget, static: Static, layout: 
         first += size
     mass, mom, energy = particle_content(P)
     to_euler = out_any & (face >= 0)
-    cells = layout.face_out[jnp.clip(face, 0, first - 1)]
-    into = [jnp.where(to_euler & (slot == k), mass, 0.0) for k in range(n)]
-    vol = [m / P.point.density for m in into]
-    U = _add_to_cells(U, cells, jnp.stack(into), jnp.where(to_euler[None], mom.T[:d], 0.0),
-                      jnp.where(to_euler, energy, 0.0), jnp.stack(vol), lay, cell_measure(cfg))
+    if static.faces:
+        cells = layout.face_out[jnp.clip(face, 0, first - 1)]
+        into = [jnp.where(to_euler & (slot == k), mass, 0.0) for k in range(n)]
+        vol = [jnp.where(to_euler & (slot == k), mass / P.point.density, 0.0) for k in range(n)]
+        U = _add_to_cells(U, cells, jnp.stack(into), jnp.where(to_euler[None], mom.T[:d], 0.0),
+                          jnp.where(to_euler, energy, 0.0), jnp.stack(vol), lay, cell_measure(cfg))
     gone = out_any & ~to_euler
     left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(gone & (slot == j), mass, 0.0)) for j in range(n)]),
                             jnp.sum(jnp.where(gone[:, None], mom, 0.0), axis=0)[:d],
@@ -391,11 +412,16 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     m_old = jnp.where(has, P.mass[b], 0.0)
     v_old = jnp.where(has[..., None], P.v[b], 0.0)
     e_old = jnp.where(has, P.point.energy[b], 0.0)
-    fed = res.mass > 0.0
-    m = m_old + res.mass
+    # a material feeds its inflow particle once the reservoir holds a meaningful share of a gas particle's
+    # mass in a cell where that material is present (numerical diffusion leaves ~1e-200 kg traces)
+    m_gas = prim_flat["rho"][layout.face_in] * h ** d / ppc ** d
+    fed = (res.mass >= FEED_FRACTION * m_gas[:, None]) & (rho > 0.0) & jnp.isfinite(rho)
+    fed = fed | (has & (res.mass > 0.0) & (rho > 0.0))
+    m = m_old + jnp.where(fed, res.mass, 0.0)
     safe = jnp.where(m > 0.0, m, 1.0)
-    v = (m_old[..., None] * v_old + res.momentum) / safe[..., None]
-    e = (m_old * (e_old + 0.5 * jnp.sum(v_old * v_old, axis=-1)) + res.energy) / safe - 0.5 * jnp.sum(v * v, axis=-1)
+    v = (m_old[..., None] * v_old + jnp.where(fed[..., None], res.momentum, 0.0)) / safe[..., None]
+    e = ((m_old * (e_old + 0.5 * jnp.sum(v_old * v_old, axis=-1)) + jnp.where(fed, res.energy, 0.0)) / safe
+         - 0.5 * jnp.sum(v * v, axis=-1))
     e = jnp.maximum(e, 0.0)
     thick = jnp.clip(m / (rho * h ** (d - 1)), 0.0, h)
     x = layout.face_centre[:, None, :] + layout.face_axis[:, None, :] * (0.5 * thick)[..., None]
@@ -429,8 +455,8 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     buffer = jnp.where(fits, buffer, res.buffer)
     released = thick >= h / ppc
     buffer = jnp.where(released & fits, -1, buffer).astype(jnp.int32)
-    keep = ~fits
-    res = Reservoirs(mass=jnp.where(keep, res.mass, 0.0), momentum=jnp.where(keep, res.momentum, 0.0),
+    keep = ~fits | ~fed
+    res = Reservoirs(mass=jnp.where(keep, res.mass, 0.0), momentum=jnp.where(keep[..., None], res.momentum, 0.0),
                      energy=jnp.where(keep, res.energy, 0.0), buffer=buffer)
     budget = budget._replace(required=jnp.maximum(budget.required, required.astype(jnp.int32)))
     return state._replace(particles=pool), res, budget
@@ -452,7 +478,7 @@ def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: St
     G = cell.shape[0]
     mass = jnp.stack([flat[k] * layout.gas_volume for k in range(n)])  # (n, G)
     cell_mass = jnp.sum(mass, axis=0)
-    present = mass > 1e-12 * cell_mass[None]
+    present = mass > FEED_FRACTION * cell_mass[None]  # traces stay behind (booked as displaced)
     rho = jnp.where(present, rho_k, 1.0)
     energy = jnp.stack(e_k)
     material = jnp.broadcast_to(jnp.asarray(static.gas_material, jnp.int32)[:, None], (n, G))

@@ -139,8 +139,15 @@ class Cfdmp:
         shape = mpm.SHAPES[info["shape_functions"]]
         half = np.zeros((setup.ring_cells.size, 3))
         half[:, :nd] = 0.5 * grid.cell_size
-        ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(half, dtype), grid, shape)
-        axis_vec = np.concatenate([np.tile(np.eye(3)[f.axis] * f.into_box, (f.outside.size, 1)) for f in setup.faces])
+        if setup.ring_cells.size:
+            ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(half, dtype), grid, shape)
+        else:  # MPM everywhere: no ring
+            S = shape.nodes_per_dim ** nd
+            ridx, rw, rgrad = jnp.zeros((S, 0), jnp.int32), jnp.zeros((S, 0), dtype), [jnp.zeros((S, 0), dtype)] * nd
+        def cat(parts, shape):
+            return np.concatenate(parts) if parts else np.zeros((0,) + shape)
+
+        axis_vec = cat([np.tile(np.eye(3)[f.axis] * f.into_box, (f.outside.size, 1)) for f in setup.faces], (3,))
         lateral = []
         for f in setup.faces:
             rows = np.zeros((3, 3))
@@ -156,11 +163,12 @@ class Cfdmp:
             fictitious=jnp.asarray(setup.fictitious), parked=jnp.asarray(setup.parked),
             outside=jnp.asarray(setup.outside), park_rows=U0,
             ring_cells=jnp.asarray(setup.ring_cells, jnp.int32), ring_idx=ridx, ring_w=rw, ring_grad=jnp.stack(rgrad),
-            face_out=jnp.asarray(np.concatenate([f.outside for f in setup.faces]), jnp.int32),
-            face_in=jnp.asarray(np.concatenate([f.bridge for f in setup.faces]), jnp.int32),
-            face_centre=jnp.asarray(_pad3(np.concatenate([f.centre for f in setup.faces])), dtype),
-            face_into=jnp.asarray(np.concatenate([np.full(f.outside.size, f.into_box) for f in setup.faces]), dtype),
-            face_axis=jnp.asarray(axis_vec, dtype), face_lateral=jnp.asarray(np.concatenate(lateral), dtype),
+            outflow_area=jnp.asarray(setup.outflow_area, dtype),
+            face_out=jnp.asarray(cat([f.outside for f in setup.faces], ()), jnp.int32),
+            face_in=jnp.asarray(cat([f.bridge for f in setup.faces], ()), jnp.int32),
+            face_centre=jnp.asarray(_pad3(cat([f.centre for f in setup.faces], (nd,))), dtype),
+            face_into=jnp.asarray(cat([np.full(f.outside.size, f.into_box) for f in setup.faces], ()), dtype),
+            face_axis=jnp.asarray(axis_vec, dtype), face_lateral=jnp.asarray(cat(lateral, (3, 3)), dtype),
             gas_x=jnp.asarray(setup.gas_x, dtype), gas_volume=jnp.asarray(setup.gas_volume, dtype),
             gas_half=jnp.asarray(setup.gas_half, dtype), gas_cell=jnp.asarray(setup.gas_cell, jnp.int32),
             boundary_mask=tuple(tuple(jnp.asarray(m) for m in pair) for pair in setup.boundary_faces),
@@ -218,7 +226,7 @@ class Cfdmp:
         d = len(cfg.shape)
 
         def stable_dt(s):
-            dt = ek.stable_dt(s.U, params.euler, cfg)
+            dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
             dt = jnp.minimum(dt, jnp.where(s.coupled, mpm.stable_dt(s.mpm, params.mpm, mcfg), jnp.inf))
             return jnp.where(s.budget.required > static.capacity, jnp.nan, dt)
 
@@ -227,10 +235,16 @@ class Cfdmp:
             dp = cp.flat_primitives(s.U, params.euler.eos, cfg)["pressure"][lay.ring_cells] - params.reference_pressure
             return jax.lax.cond(jnp.max(dp) > params.activation, lambda s: _activate(s, params, cs), lambda s: s, s)
 
+        def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, mpm.musl.NodalSource(
+                0.0, 0.0, cp.outflow_traction(s.mpm.particles, lay, cs)))
+            U, ms, budget = cp.remove_leaving(s.U, ms, s.budget, cs, lay)
+            return s._replace(U=U, mpm=ms, budget=budget)
+
         def coupled(s, dt):
             eos = params.euler.eos
             prim = cp.flat_primitives(s.U, eos, cfg)
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs))
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs, s.mpm.particles))
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
             U, res, budget = cp.receive(U, s.reservoirs, s.budget, T, prim, eos, cs, lay)
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
@@ -240,7 +254,7 @@ class Cfdmp:
             return s._replace(U=cp.fictitious(U, rows, gas_mass, lay), mpm=ms, reservoirs=res, budget=budget)
 
         def step(s, dt):
-            new = jax.lax.cond(s.coupled, coupled, euler_only, s, dt)
+            new = jax.lax.cond(s.coupled, coupled if cs.faces else mpm_only, euler_only, s, dt)
             dp = self._pressure(self._view(new, cs, lay), params, cs) - params.reference_pressure
             return new._replace(**blast_maps.update(_maps(new), dp, s.t, dt, params.arrival_threshold)._asdict())
 

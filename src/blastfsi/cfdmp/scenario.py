@@ -82,8 +82,10 @@ class CfdmpScenario(ScenarioBase):
             if lo < dlo or hi > dhi:
                 raise ValueError(f"mpm_region: the box [{lo:g}, {hi:g}] m along {ax} leaves the domain "
                                  f"[{dlo:g}, {dhi:g}] m")
-        if all(lo == dlo and hi == dhi for lo, hi, dlo, dhi in zip(box.lower, box.upper, d.lower, d.upper)):
-            raise ValueError("mpm_region covers the whole domain: no Eulerian region is left (use method = 'mpm')")
+        if all(lo == dlo and hi == dhi for lo, hi, dlo, dhi in zip(box.lower, box.upper, d.lower, d.upper)) \
+                and box.activation_overpressure > 0.0:
+            raise ValueError("mpm_region covers the whole domain (MPM everywhere, the grid only carries the initial "
+                             "condition): mpm_region.activation_overpressure must be 0")
         for kinds, ax in zip((self.boundaries.x, self.boundaries.y, self.boundaries.z), AXES[:nd]):
             if "periodic" in kinds:
                 raise ValueError(f"boundaries.{ax}: periodic faces are not supported by cfdmp")

@@ -194,7 +194,7 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     def stage(i, state):  # the transfers advance like the state, with L replaced by the face fluxes / dx
         _, fluxes = rhs(jax.lax.optimization_barrier(state[0]), eos_r, cfg, lay, record=True)
         return plain(i, state[0]), tuple(
-            tuple(x + dt * f / cfg.dx for x, f in zip(m, fl)) for m0, m, fl in zip(moved0, state[1], fluxes))
+            combine(i, m0, m, tuple(f / cfg.dx for f in fl)) for m0, m, fl in zip(moved0, state[1], fluxes))
 
     rows, moved = jax.lax.fori_loop(0, 2, stage, (rows0, moved0))
     return jnp.stack(rows), moved

@@ -132,7 +132,7 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False)
             new = new + lam * a_mid * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
         out.append(new)
     if record:
-        return tuple(out), tuple(lam * fx + 0.0 * d for fx, d in zip(fh, visc))
+        return tuple(out), tuple(lam * fx - d for fx, d in zip(fh, visc))
     return tuple(out)
 
 

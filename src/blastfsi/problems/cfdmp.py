@@ -79,6 +79,7 @@ class Setup:
     gas_half: np.ndarray  # (n_gas, 3) GIMP half-sizes
     gas_cell: np.ndarray  # (n_gas,) flat Eulerian cell of each lattice point
     boundary_faces: tuple  # per axis (lower, upper) bool masks over that face's cells: Eulerian-only cells
+    outflow_area: np.ndarray  # (num_nodes, ndim) -n A on MPM nodes of box faces on outflow domain faces
     info: dict = field(default_factory=dict)
 
     @property
@@ -109,7 +110,8 @@ def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
     if sc.initial.kind == "charge" and sc.initial.remap_time is None:
         centre = np.asarray(sc.initial.center or [0.0] * sc.domain.ndim, float)
         nearest = np.clip(centre, sc.mpm_region.lower, sc.mpm_region.upper)
-        data["output"]["gauges"] = list(data["output"]["gauges"]) + [nearest.tolist()]
+        if np.any(nearest != centre):  # (a charge inside the box: MPM everywhere, the gauges set the time)
+            data["output"]["gauges"] = list(data["output"]["gauges"]) + [nearest.tolist()]
     return EulerScenario.model_validate(data)
 
 
@@ -267,6 +269,17 @@ def build(sc: CfdmpScenario) -> Setup:
             pair.append(np.take(~in_box, i, axis=ax))
         boundary_faces.append(tuple(pair))
 
+    # MPM nodes on box faces that lie on outflow faces of the domain: area A = h^(ndim-1), normal n outward
+    outflow_area = np.zeros(grid.nodes + (nd,))
+    for ax in range(nd):
+        for side, sign in ((0, -1.0), (1, 1.0)):
+            if coupled[ax][side] or getattr(sc.boundaries, AXES[ax])[side] != "outflow":
+                continue
+            sl = [slice(None)] * nd
+            sl[ax] = 0 if side == 0 else -1
+            outflow_area[tuple(sl) + (ax,)] = -sign * dx ** (nd - 1)
+    outflow_area = outflow_area.reshape(grid.num_nodes, nd)
+
     info = dict(esetup.info)
     info.update(mpm_cells=list(grid.cells), mpm_origin=list(grid.origin), box_cells=[list(lo), list(hi)],
                 bridge_cells=w, coupled_faces=[f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
@@ -277,4 +290,4 @@ def build(sc: CfdmpScenario) -> Setup:
                 q=[sc.numerics.q_quadratic, sc.numerics.q_linear])
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
                  int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, gx, gvol, ghalf, gcell,
-                 tuple(boundary_faces), info)
+                 tuple(boundary_faces), outflow_area, info)
