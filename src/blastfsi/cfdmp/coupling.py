@@ -100,6 +100,7 @@ class Static(NamedTuple):
     gas_material: tuple  # MPM material index of each Eulerian material
     n_structure: int  # structure particles (first slots of the pool)
     ppc: int  # gas particles per cell and direction
+    outflow: bool  # some box face lies on an outflow face of the domain (outflow_traction)
 
 
 class Reservoirs(NamedTuple):
@@ -225,6 +226,8 @@ def outflow_traction(P: mpm.Particles, layout: Layout, static: Static):
     at the same pressure (zero gradient, like the Eulerian outflow ghost cells) instead of a vacuum, which a
     free MPM face would be."""
     cfg = static.mpm
+    if not static.outflow:
+        return jnp.zeros_like(layout.outflow_area)
     slot = _gas_index(static, P.material)
     m = jnp.where(P.active & (slot >= 0), P.mass, 0.0)
     p = -(P.point.stress[:, 0] + P.point.stress[:, 1] + P.point.stress[:, 2]) / 3.0 + P.q

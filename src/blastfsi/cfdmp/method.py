@@ -124,7 +124,8 @@ class Cfdmp:
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))
         n_struct = int(setup.info["structure_particles"])
         coupling = cp.Static(cfg, mcfg, faces, sizes, tuple(setup.box_lo), tuple(setup.box_hi), offset,
-                             tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]))
+                             tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
+                             bool(np.any(setup.outflow_area)))
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
         return Static(coupling, flat, setup.capacity)
 
@@ -230,16 +231,19 @@ class Cfdmp:
             dt = jnp.minimum(dt, jnp.where(s.coupled, mpm.stable_dt(s.mpm, params.mpm, mcfg), jnp.inf))
             return jnp.where(s.budget.required > static.capacity, jnp.nan, dt)
 
+        # each branch returns the new state and the viewed grid (blast maps), one gas P2G per step
         def euler_only(s, dt):
             s = s._replace(U=ek.step(s.U, dt, params.euler, cfg))
             dp = cp.flat_primitives(s.U, params.euler.eos, cfg)["pressure"][lay.ring_cells] - params.reference_pressure
-            return jax.lax.cond(jnp.max(dp) > params.activation, lambda s: _activate(s, params, cs), lambda s: s, s)
+            s = jax.lax.cond(jnp.max(dp) > params.activation, lambda s: _activate(s, params, cs), lambda s: s, s)
+            return s, s.U
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
             ms = mpm.step(s.mpm, dt, params.mpm, mcfg, mpm.musl.NodalSource(
                 0.0, 0.0, cp.outflow_traction(s.mpm.particles, lay, cs)))
             U, ms, budget = cp.remove_leaving(s.U, ms, s.budget, cs, lay)
-            return s._replace(U=U, mpm=ms, budget=budget)
+            rows, gas_volume = cp.gas_rows(ms.particles, cs)
+            return s._replace(U=U, mpm=ms, budget=budget), cp.view(U, rows, gas_volume, lay)
 
         def coupled(s, dt):
             eos = params.euler.eos
@@ -250,12 +254,13 @@ class Cfdmp:
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
             U, ms, budget = cp.remove_leaving(U, ms, budget, cs, lay)
             ms, res, budget = cp.feed(ms, res, budget, cp.flat_primitives(U, eos, cfg), eos, params.mpm, cs, lay)
-            rows, gas_mass = cp.gas_rows(ms.particles, cs)
-            return s._replace(U=cp.fictitious(U, rows, gas_mass, lay), mpm=ms, reservoirs=res, budget=budget)
+            rows, gas_volume = cp.gas_rows(ms.particles, cs)
+            U = cp.fictitious(U, rows, gas_volume, lay)
+            return (s._replace(U=U, mpm=ms, reservoirs=res, budget=budget), cp.view(U, rows, gas_volume, lay))
 
         def step(s, dt):
-            new = jax.lax.cond(s.coupled, coupled if cs.faces else mpm_only, euler_only, s, dt)
-            dp = self._pressure(self._view(new, cs, lay), params, cs) - params.reference_pressure
+            new, viewed = jax.lax.cond(s.coupled, coupled if cs.faces else mpm_only, euler_only, s, dt)
+            dp = self._pressure(viewed, params, cs) - params.reference_pressure
             return new._replace(**blast_maps.update(_maps(new), dp, s.t, dt, params.arrival_threshold)._asdict())
 
         def history_row(s):

@@ -53,7 +53,7 @@ class CfdmpNumerics(SharedNumerics):
     q_quadratic: float = Field(DEFAULT_QUADRATIC, ge=0.0, le=10.0, description="MPM bulk viscosity C_q")
     q_linear: float = Field(DEFAULT_LINEAR, ge=0.0, le=10.0, description="MPM bulk viscosity C_l")
     capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
-        "particle pool size (default: structures + 4 x the gas particles of the box)"))
+        "particle pool size (default: structures + 3 x the gas particles of the box)"))
 
 
 class CfdmpScenario(ScenarioBase):

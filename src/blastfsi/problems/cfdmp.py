@@ -34,7 +34,7 @@ from blastfsi.problems import euler as euler_problem
 from blastfsi.problems import mpm as mpm_problem
 from blastfsi.scenario import ScenarioError
 
-CAPACITY_FACTOR = 4  # default pool: structures + 4 x the box's gas particles (compression by the blast)
+CAPACITY_FACTOR = 3  # default pool: structures + 3 x the box's gas particles (compression by the blast)
 
 
 @dataclass(frozen=True)
