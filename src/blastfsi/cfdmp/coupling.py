@@ -58,6 +58,7 @@ from blastfsi.euler.mixture import cell_state, cold_terms, eos_rows
 from blastfsi.mpm.musl import wave_speed
 
 FEED_FRACTION = 1e-6  # smallest reservoir mass that feeds an inflow particle, in gas particles of the bridge cell
+PRESENT = 1e-3  # smallest mass fraction of a material in the bridge cell whose phase density is trusted for it
 
 
 class Layout(NamedTuple):
@@ -125,10 +126,13 @@ def cell_measure(cfg: ek.Config) -> float:
 
 
 def flat_primitives(U, eos, cfg: ek.Config) -> dict:
-    """rho (N,), velocity (ndim, N), pressure (N,) and phase densities rho_k (n, N) of every cell (C order)."""
+    """rho (N,), velocity (ndim, N), pressure (N,), phase densities rho_k and mass fractions (n, N) of every
+    cell (C order)."""
     lay = row_layout(cfg)
-    st = cell_state(tuple(U.reshape(U.shape[0], -1)), eos_rows(eos, lay.n), lay)
-    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "rho_k": jnp.stack(st.rho_k)}
+    rows = tuple(U.reshape(U.shape[0], -1))
+    st = cell_state(rows, eos_rows(eos, lay.n), lay)
+    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "rho_k": jnp.stack(st.rho_k),
+            "mass_fraction": jnp.stack([rows[k] / st.rho for k in range(lay.n)])}
 
 
 def _gas_index(static: Static, material):
@@ -416,9 +420,11 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     v_old = jnp.where(has[..., None], P.v[b], 0.0)
     e_old = jnp.where(has, P.point.energy[b], 0.0)
     # a material feeds its inflow particle once the reservoir holds a meaningful share of a gas particle's
-    # mass in a cell where that material is present (numerical diffusion leaves ~1e-200 kg traces)
+    # mass and the bridge cell holds enough of it for its phase density to mean something (numerical
+    # diffusion leaves traces down to ~1e-200 kg, whose phase density is noise); traces wait in the reservoir
     m_gas = prim_flat["rho"][layout.face_in] * h ** d / ppc ** d
-    fed = (res.mass >= FEED_FRACTION * m_gas[:, None]) & (rho > 0.0) & jnp.isfinite(rho)
+    present = jnp.stack([prim_flat["mass_fraction"][k][layout.face_in] for k in range(n)], axis=1) >= PRESENT
+    fed = (res.mass >= FEED_FRACTION * m_gas[:, None]) & present & (rho > 0.0) & jnp.isfinite(rho)
     fed = fed | (has & (res.mass > 0.0) & (rho > 0.0))
     m = m_old + jnp.where(fed, res.mass, 0.0)
     safe = jnp.where(m > 0.0, m, 1.0)

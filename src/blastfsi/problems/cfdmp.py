@@ -269,15 +269,22 @@ def build(sc: CfdmpScenario) -> Setup:
             pair.append(np.take(~in_box, i, axis=ax))
         boundary_faces.append(tuple(pair))
 
-    # MPM nodes on box faces that lie on outflow faces of the domain: area A = h^(ndim-1), normal n outward
+    # MPM nodes on box faces that lie on outflow faces of the domain: -n A, n the outward normal, A the node's
+    # share of the face (h per lateral direction, h/2 at the grid's edges, where the particles' P2G is one-sided)
     outflow_area = np.zeros(grid.nodes + (nd,))
     for ax in range(nd):
         for side, sign in ((0, -1.0), (1, 1.0)):
             if coupled[ax][side] or getattr(sc.boundaries, AXES[ax])[side] != "outflow":
                 continue
+            area = np.ones(())
+            for a in range(nd):
+                w = np.ones(1) if a == ax else np.full(grid.nodes[a], dx)
+                if a != ax:
+                    w[[0, -1]] *= 0.5
+                area = np.multiply.outer(area, w)
             sl = [slice(None)] * nd
-            sl[ax] = 0 if side == 0 else -1
-            outflow_area[tuple(sl) + (ax,)] = -sign * dx ** (nd - 1)
+            sl[ax] = slice(0, 1) if side == 0 else slice(-1, None)
+            outflow_area[tuple(sl) + (ax,)] = -sign * area
     outflow_area = outflow_area.reshape(grid.num_nodes, nd)
 
     info = dict(esetup.info)
