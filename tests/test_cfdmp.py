@@ -103,3 +103,38 @@ def test_three_dimensional_coupling_closes_its_mass_budget():
     assert s["budget"]["max_mass_residual_relative"] < 1e-13
     # the shock (554 m/s) reaches the box face at 36 us and the first bridge cells before the end
     assert s["gauges"][1]["region"] == "bridge" and s["gauges"][1]["peak_overpressure"] > 1e4
+
+
+def test_trace_materials_get_the_mixture_state():
+    """A material below PRESENT of a cell's mass (the products traces the scheme's diffusion leaves ahead of a
+    blast, down to ~1e-124 kg/m3 with volume fractions ~1e-36: the he-slab-2d cell that first failed) carries
+    the mixture's density and specific energy into the transport terms instead of its own noisy phase state,
+    which overflowed there; a material present keeps its phase state (e_k at the cell pressure)."""
+    import jax.numpy as jnp
+
+    from blastfsi import euler
+    from blastfsi.cfdmp import coupling as cp
+    from blastfsi.eos import jwl
+    from blastfsi.eos.jwl import ideal_gas_params
+    from blastfsi.materials.gases import GASES
+
+    eos = jnp.asarray([list(GASES["tnt"].eos_params()), list(ideal_gas_params(1.4))])
+    cfg = euler.Config(shape=(3,), dx=1e-3, geometry=euler.CARTESIAN, bc=((euler.OUTFLOW, euler.OUTFLOW),),
+                       scheme=euler.HLLC_MUSCL, n_materials=2, origin=(0.0,))
+    rho_k = jnp.asarray([[4.787892e-97 / 1.941234e-36, 1.0, 1500.0], [1.225, 1.225, 1.3]])
+    alpha = jnp.asarray([1.941234e-36, 0.5, 1.0 - 1e-9])
+    p = jnp.asarray([1.0136e5, 2.0e5, 1.0e9])
+    U = euler.conservative(rho_k, alpha, jnp.zeros((1, 3)), p, euler.Params(eos, jnp.asarray(0.5)), cfg)
+    prim = cp.flat_primitives(U, eos, cfg)
+    rho, e = cp.trusted_phases(prim, jnp.arange(3), eos, 2)
+    rho, e = np.asarray(jnp.stack(rho)), np.asarray(jnp.stack(e))
+    assert np.all(np.isfinite(rho)) and np.all(np.isfinite(e))
+    mix_e = np.asarray(prim["internal_energy"])
+    # products trace in air (cell 0) and air trace in products (cell 2): the mixture's state
+    assert rho[0, 0] == pytest.approx(float(prim["rho"][0]), rel=1e-14)
+    assert e[0, 0] == pytest.approx(mix_e[0], rel=1e-14) and e[1, 2] == pytest.approx(mix_e[2], rel=1e-14)
+    # both present (cell 1): each phase at its own density has the cell pressure
+    rows = euler.mixture.eos_rows(eos, 2)
+    for k in range(2):
+        assert rho[k, 1] == pytest.approx(float(rho_k[k, 1]), rel=1e-12)
+        assert float(jwl.pressure(rho[k, 1], e[k, 1], rows[k])) == pytest.approx(2.0e5, rel=1e-10)

@@ -132,6 +132,7 @@ def flat_primitives(U, eos, cfg: ek.Config) -> dict:
     rows = tuple(U.reshape(U.shape[0], -1))
     st = cell_state(rows, eos_rows(eos, lay.n), lay)
     return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "rho_k": jnp.stack(st.rho_k),
+            "internal_energy": st.rho_e / st.rho,
             "mass_fraction": jnp.stack([rows[k] / st.rho for k in range(lay.n)])}
 
 
@@ -162,7 +163,7 @@ def gas_sums(P: mpm.Particles, static: Static):
     n = len(static.gas_material)
     slot = _gas_index(static, P.material)
     gas = P.active & (slot >= 0)
-    idx, w, _ = mpm.stencil(P.x, P.half_size, grid, cfg.shape)
+    idx, w, _ = mpm.materialised_stencil(P, grid, cfg.shape)
     m = jnp.where(gas, P.mass, 0.0)
     vol = m / P.point.density
     channels = [w * jnp.where(slot == k, m, 0.0) for k in range(n)]
@@ -235,7 +236,7 @@ def outflow_traction(P: mpm.Particles, layout: Layout, static: Static):
     slot = _gas_index(static, P.material)
     m = jnp.where(P.active & (slot >= 0), P.mass, 0.0)
     p = -(P.point.stress[:, 0] + P.point.stress[:, 1] + P.point.stress[:, 2]) / 3.0 + P.q
-    idx, w, _ = mpm.stencil(P.x, P.half_size, cfg.grid, cfg.shape)
+    idx, w, _ = mpm.materialised_stencil(P, cfg.grid, cfg.shape)
     nodal = mpm.musl.particle_to_grid(idx, [w * m, w * (m * p)], cfg.grid.num_nodes, cfg.combined_scatter)
     p_node = jnp.where(nodal[:, 0] > 0.0, nodal[:, 1] / jnp.where(nodal[:, 0] > 0.0, nodal[:, 0], 1.0), 0.0)
     return p_node[:, None] * layout.outflow_area
@@ -279,6 +280,25 @@ def phase_energy(rho_k, p, rows):
     return [(p - cold_terms(r, row)[0]) / (row.omega * r) for r, row in zip(rho_k, rows)]
 
 
+def trusted_phases(prim_flat: dict, cells, eos, n: int):
+    """Phase densities and phase internal energies (at the cell pressure) of ``cells`` for every material.
+
+    A material that makes up less than PRESENT of a cell's mass gets the mixture's density and specific
+    internal energy instead: its own phase density is numerical noise there (the scheme's diffusion leaves
+    traces down to ~1e-200 kg/m3 with volume fractions down to ~1e-300), and e_k = (p - f_k)/(G_k rho_k)
+    overflows. Any split of a transfer between the materials keeps the budget, which books their sum."""
+    rows = eos_rows(eos, n)
+    p = prim_flat["pressure"][cells]
+    rho_k, e_k = [], []
+    for k in range(n):
+        trusted = prim_flat["mass_fraction"][k][cells] >= PRESENT
+        r = jnp.where(trusted, prim_flat["rho_k"][k][cells], 1.0)
+        e = phase_energy([r], p, [rows[k]])[0]
+        rho_k.append(jnp.where(trusted, r, prim_flat["rho"][cells]))
+        e_k.append(jnp.where(trusted, e, prim_flat["internal_energy"][cells]))
+    return rho_k, e_k
+
+
 def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, V):
     """Add per-entry content (mass per material (n, E), momentum (d, E), energy (E,), phase volume (n, E)) to the
     Eulerian cells ``cells`` (E,) (000 Eqs. 49-51); the products fraction becomes the volume-weighted mean of the
@@ -308,8 +328,7 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     donor = jnp.where(inflow, layout.face_out, layout.face_in)
     u = prim_flat["velocity"][:, donor]  # (d, F)
     p = prim_flat["pressure"][donor]
-    rho_k = [prim_flat["rho_k"][k][donor] for k in range(n)]
-    e_k = phase_energy(rho_k, p, eos_rows(eos, n))
+    rho_k, e_k = trusted_phases(prim_flat, donor, eos, n)
     ke = 0.5 * jnp.sum(u * u, axis=0)
     carried_mom = jnp.sum(m_k, axis=0)[None] * u
     carried_e = jnp.stack([jnp.where(m_k[k] != 0.0, m_k[k] * (e_k[k] + ke), 0.0) for k in range(n)])  # (n, F)
@@ -412,7 +431,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     P = state.particles
     cap = P.mass.shape[0]
     gm = jnp.asarray(static.gas_material, jnp.int32)
-    rho = jnp.stack([prim_flat["rho_k"][k][layout.face_in] for k in range(n)], axis=1)  # (F, n)
+    rho = jnp.stack(trusted_phases(prim_flat, layout.face_in, eos, n)[0], axis=1)  # (F, n)
     b = jnp.clip(res.buffer, 0, cap - 1)
     near = jnp.all(jnp.abs(P.x[b] - layout.face_centre[:, None, :]) <= 1.01 * h, axis=-1)  # slot not reused
     has = (res.buffer >= 0) & P.active[b] & (P.material[b] == gm[None, :]) & near
@@ -473,22 +492,20 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
 
 def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: Static, layout: Layout):
     """The gas of the box becomes particles (000 Sec. 3, activation): one particle per lattice point and
-    material present, mass = partial density x lattice volume, the cell's velocity, the phase density and
+    material present (at least PRESENT of the cell's mass), mass = partial density x lattice volume, the cell's velocity, the phase density and
     the phase internal energy at the cell pressure (so the cell's mass, momentum and energy carry over
     exactly). Returns the new state and the number of active particles needed."""
     cfg, d = static.euler, static.mpm.grid.dim
     n = cfg.n_materials
     cell = layout.gas_cell
     flat = U.reshape(U.shape[0], -1)[:, cell]  # (nvar, G)
-    rho_k = prim_flat["rho_k"][:, cell]  # (n, G)
-    p = prim_flat["pressure"][cell]
-    e_k = phase_energy(list(rho_k), p, eos_rows(eos, n))
+    rho_k, e_k = trusted_phases(prim_flat, cell, eos, n)
     u = prim_flat["velocity"][:, cell]  # (d, G)
     G = cell.shape[0]
     mass = jnp.stack([flat[k] * layout.gas_volume for k in range(n)])  # (n, G)
     cell_mass = jnp.sum(mass, axis=0)
-    present = mass > FEED_FRACTION * cell_mass[None]  # traces stay behind (booked as displaced)
-    rho = jnp.where(present, rho_k, 1.0)
+    present = mass >= PRESENT * cell_mass[None]  # traces stay behind (booked as displaced)
+    rho = jnp.where(present, jnp.stack(rho_k), 1.0)
     energy = jnp.stack(e_k)
     material = jnp.broadcast_to(jnp.asarray(static.gas_material, jnp.int32)[:, None], (n, G))
     rows = eos_rows(eos, n)

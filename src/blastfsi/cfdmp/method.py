@@ -118,11 +118,14 @@ class Cfdmp:
         cfg = ek.Config(shape=e.grid.shape, dx=float(e.grid.dx), geometry=GEOMETRY_CODE[e.grid.geometry], bc=e.bc,
                         scheme=scheme, n_materials=len(e.materials),
                         origin=tuple(float(v) for v in e.grid.lower))
-        mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"])
+        n_struct = int(setup.info["structure_particles"])
+        # the structures fill the first slots of the pool and are never deleted; the gas lives after them
+        slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)
+                      for k in range(len(setup.models)))
+        mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots)
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
         sizes = tuple(int(f.outside.size) for f in setup.faces)
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))
-        n_struct = int(setup.info["structure_particles"])
         coupling = cp.Static(cfg, mcfg, faces, sizes, tuple(setup.box_lo), tuple(setup.box_hi), offset,
                              tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
                              bool(np.any(setup.outflow_area)))
@@ -235,7 +238,8 @@ class Cfdmp:
         def euler_only(s, dt):
             s = s._replace(U=ek.step(s.U, dt, params.euler, cfg))
             dp = cp.flat_primitives(s.U, params.euler.eos, cfg)["pressure"][lay.ring_cells] - params.reference_pressure
-            s = jax.lax.cond(jnp.max(dp) > params.activation, lambda s: _activate(s, params, cs), lambda s: s, s)
+            hot = jnp.max(dp, initial=-jnp.inf) > params.activation  # (no ring cells: MPM everywhere)
+            s = jax.lax.cond(hot, lambda s: _activate(s, params, cs), lambda s: s, s)
             return s, s.U
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere

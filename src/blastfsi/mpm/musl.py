@@ -73,6 +73,8 @@ class Config:
     models: tuple  # Model per material index
     prescribed: bool  # some particles have a prescribed velocity (adds the constraint channels)
     combined_scatter: bool  # one row scatter/gather of all channels (GPU) or one per channel (CPU)
+    model_slots: tuple | None = None  # per model, the pool slots (start, stop) its particles can occupy
+    #                                   (None: all): a model's update runs on those slots only
 
 
 class Params(NamedTuple):
@@ -100,9 +102,12 @@ class NodalSource(NamedTuple):
 
 
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
-                combined_scatter: bool | None = None) -> Config:
+                combined_scatter: bool | None = None, model_slots=None) -> Config:
     """Checked :class:`Config`; ``combined_scatter`` defaults to True except on
-    the CPU backend (see :func:`particle_to_grid`)."""
+    the CPU backend (see :func:`particle_to_grid`); ``model_slots``: per model the
+    pool slots (start, stop) its particles can occupy, or None for all (a coupled run keeps
+    the structures in the first slots and the gas after them: each model then runs on its
+    own part of the pool only)."""
     if shape not in SHAPES:
         raise MPMError(f"numerics.shape: expected one of {tuple(SHAPES)}, got {shape!r}")
     models = tuple(models)
@@ -110,8 +115,13 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
         raise MPMError(f"materials: expected one or more constitutive Models, got {models!r}")
     if combined_scatter is None:
         combined_scatter = jax.default_backend() != "cpu"
+    if model_slots is not None:
+        model_slots = tuple((int(a), int(b)) for a, b in model_slots)
+        if len(model_slots) != len(models) or any(not 0 <= a <= b for a, b in model_slots):
+            raise MPMError(f"model_slots: expected one (start, stop) with 0 <= start <= stop per model, "
+                           f"got {model_slots!r}")
     return Config(grid=grid, shape=SHAPES[shape], models=models, prescribed=bool(prescribed),
-                  combined_scatter=bool(combined_scatter))
+                  combined_scatter=bool(combined_scatter), model_slots=model_slots)
 
 
 def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=DEFAULT_LINEAR,
@@ -146,25 +156,44 @@ def _select(mask, a, b):
     return jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b)
 
 
-def _material_update(ps: PointState, dstrain, dspin, dt, material, params: Params, config: Config) -> PointState:
-    """Each material's model on all particles, selected by material index (static loop)."""
-    out = None
-    width = ps.history.shape[1]
-    for k, model in enumerate(config.models):
-        hk = model.history_size
-        new = model.update(ps._replace(history=ps.history[:, :hk]), dstrain, dspin, dt, params.materials[k])
-        new = new._replace(history=jnp.concatenate([new.history, ps.history[:, hk:width]], axis=1))
-        out = new if out is None else jax.tree_util.tree_map(lambda a, b: _select(material == k, a, b), new, out)
+def _per_model(evaluate, material, out, config: Config, pool: bool):
+    """``out`` with each model's particles replaced by ``evaluate(k, model, slots)`` (static loop over
+    models). ``pool``: the arrays are the whole pool, and a model runs on its ``model_slots`` only;
+    otherwise (a batch of new particles) every model runs on all of them."""
+    n = material.shape[0]
+    ranges = config.model_slots if pool and config.model_slots is not None else [(0, n)] * len(config.models)
+    for k, (model, (a, b)) in enumerate(zip(config.models, ranges)):
+        a, b = min(a, n), min(b, n)
+        if a == b:
+            continue
+        sl = slice(a, b)
+        new = evaluate(k, model, sl)
+        mine = material[sl] == k
+        out = jax.tree_util.tree_map(lambda o, v: o.at[sl].set(_select(mine, v, o[sl])), out, new)
     return out
 
 
-def wave_speed(ps: PointState, material, params: Params, config: Config):
-    """Signal speed c of every particle from its material's model."""
-    c = None
-    for k, model in enumerate(config.models):
-        ck = model.wave_speed(ps._replace(history=ps.history[:, :model.history_size]), params.materials[k])
-        c = ck if c is None else jnp.where(material == k, ck, c)
-    return c
+def _material_update(ps: PointState, dstrain, dspin, dt, material, params: Params, config: Config) -> PointState:
+    """Each material's model on its particles' slots, selected by material index (static loop)."""
+    width = ps.history.shape[1]
+
+    def update(k, model, sl):
+        hk = model.history_size
+        part = jax.tree_util.tree_map(lambda a: a[sl], ps)
+        new = model.update(part._replace(history=part.history[:, :hk]), dstrain[sl], dspin[sl], dt,
+                           params.materials[k])
+        return new._replace(history=jnp.concatenate([new.history, part.history[:, hk:width]], axis=1))
+
+    return _per_model(update, material, ps, config, pool=True)
+
+
+def wave_speed(ps: PointState, material, params: Params, config: Config, pool: bool = False):
+    """Signal speed c of every particle from its material's model (``pool``: see :func:`_per_model`)."""
+    def speed(k, model, sl):
+        part = jax.tree_util.tree_map(lambda a: a[sl], ps)
+        return model.wave_speed(part._replace(history=part.history[:, :model.history_size]), params.materials[k])
+
+    return _per_model(speed, material, jnp.zeros_like(ps.density), config, pool)
 
 
 def initialize(particles: Particles, params: Params, config: Config) -> State:
@@ -232,7 +261,7 @@ def _pad3(columns):
     return jnp.stack(list(columns) + [zero] * (3 - len(columns)), axis=1)
 
 
-def _materialised_stencil(P: Particles, grid: Grid, shape: Shape):
+def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     """:func:`stencil` of the active particles (zero weights for inactive ones).
 
     XLA:CPU fuses an elementwise producer into each of its consumers, so the
@@ -266,7 +295,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     P, grid = state.particles, config.grid
     d, n_nodes, combined = grid.dim, grid.num_nodes, config.combined_scatter
     act = P.active
-    idx, w, grad = _materialised_stencil(P, grid, config.shape)
+    idx, w, grad = materialised_stencil(P, grid, config.shape)
     m = jnp.where(act, P.mass, 0.0)
     vol = jnp.where(act, P.mass / P.point.density, 0.0)  # m_p / rho_p of Eq. (19)
     r = jnp.where(act, P.x[:, 0], 1.0)  # radius (axisymmetric)
@@ -324,7 +353,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
     energy = ps.energy - P.q * dvol / ps.density  # q work, -q dV per unit mass (Eq. 13 with p + q)
     new = _material_update(ps._replace(density=rho, energy=energy), dstrain, dspin, dt, P.material, params, config)
-    c = wave_speed(new, P.material, params, config)
+    c = wave_speed(new, P.material, params, config, pool=True)
     rate = dvol / dt
     q = bulk_viscosity(rho, c, rate, grid.cell_size, params.q_quadratic, params.q_linear)
     d_plastic = new.plastic_strain - ps.plastic_strain

@@ -1,0 +1,204 @@
+"""Seed 000 Sec. 5.2 (explosion next to a concrete slab) through CFDMP: Figs. 10-12 and the slab's damage.
+
+    python docs/figures/make_000_figures.py run DIR        # the runs below into DIR (hours on a 2-core CPU)
+    python docs/figures/make_000_figures.py figures DIR    # PNG + he_slab_2d.json here, from DIR
+
+Runs (all through ``blastfsi.run``, the shipped examples with the overrides named):
+
+* ``w2``, ``w5``, ``w8``: ``he-slab-2d`` with ``mpm_region.bridge_cells`` = 2, 5, 8 to the example's end
+  (80 us): the two symmetric gauges (Fig. 10 for w = 5, Fig. 11 for the others) and the slab at the end;
+* ``cfdmp-32.5us``, ``mpm-32.5us``: ``he-slab-2d`` and ``he-slab-2d-mpm`` to 32.5 us, the time of Fig. 12,
+  with the final field written: pressure in the interaction region side by side, and the wall times.
+
+Every number in docs/cfdmp.md about he-slab-2d comes from the JSON this writes.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).parent
+FIG12_TIME = 32.5e-6  # s, 000 Fig. 12
+REGION_X = (0.110, 0.160)  # m, the MPM (interaction) region of 000 Sec. 5.2
+RUNS = {
+    "w2": ("he-slab-2d", {"mpm_region.bridge_cells": 2}),
+    "w5": ("he-slab-2d", {}),
+    "w8": ("he-slab-2d", {"mpm_region.bridge_cells": 8}),
+    "cfdmp-32.5us": ("he-slab-2d", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
+    "mpm-32.5us": ("he-slab-2d-mpm", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
+}
+
+
+def run(folder: Path, names) -> None:
+    import blastfsi
+
+    for name in names:
+        example, overrides = RUNS[name]
+        res = blastfsi.run(example, set=overrides, out=folder / name)
+        print(name, json.dumps({k: res.summary[k] for k in ("steps", "wall_time", "compile_time")}), flush=True)
+
+
+def _summary(folder: Path) -> dict:
+    return json.loads((folder / "summary.json").read_text())
+
+
+def _history(folder: Path) -> dict:
+    from blastfsi.io.results import read_history
+
+    return read_history(folder / "history.csv")
+
+
+def _last_snapshot(folder: Path):
+    files = sorted((folder / "fields").glob("member0_*.h5"))
+    return h5py.File(files[-1], "r")
+
+
+def gauge_metrics(summary: dict) -> list[dict]:
+    return [{k: g[k] for k in ("position", "region", "peak_overpressure", "impulse", "arrival_time")}
+            for g in summary["gauges"]]
+
+
+def symmetry(gauges: list[dict]) -> dict:
+    """Gauge 2 (MPM region) relative to gauge 1 (Eulerian region), the comparison of Figs. 10-11."""
+    a, b = gauges
+    return {key: b[key] / a[key] - 1.0 for key in ("peak_overpressure", "impulse", "arrival_time")}
+
+
+def fig10_11(folder: Path, out: dict) -> None:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    out["bridge_width"] = {}
+    for name in ("w2", "w5", "w8"):
+        if not (folder / name / "summary.json").exists():
+            continue
+        s, h = _summary(folder / name), _history(folder / name)
+        g = gauge_metrics(s)
+        out["bridge_width"][name] = {"bridge_cells": s["bridge_cells"], "gauges": g, "gauge2_over_gauge1": symmetry(g),
+                                     "steps": s["steps"], "wall_time": s["wall_time"], "budget": s["budget"],
+                                     "structures": s.get("structures")}
+        t = h["time"] * 1e6
+        if name == "w5":
+            axes[0].plot(t, h["gauge0_overpressure"] / 1e6, label="gauge 1 (-125, 250) mm, Eulerian")
+            axes[0].plot(t, h["gauge1_overpressure"] / 1e6, "--", label="gauge 2 (125, 250) mm, MPM")
+        axes[1].plot(t, h["gauge1_overpressure"] / 1e6, label=f"gauge 2, w = {s['bridge_cells']}")
+        if name == "w5":
+            axes[1].plot(t, h["gauge0_overpressure"] / 1e6, "k:", label="gauge 1 (w = 5)")
+    axes[0].set_title("Fig. 10: symmetric gauges, w = 5")
+    axes[1].set_title("Fig. 11: bridge width")
+    for ax in axes:
+        ax.set_xlabel("time [us]"), ax.set_ylabel("overpressure [MPa]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(HERE / "he_slab_2d_gauges.png", dpi=120)
+    plt.close(fig)
+
+
+def _region_pressure(snap):
+    g = snap["grid"]
+    origin, spacing, shape = g.attrs["origin"], g.attrs["spacing"], g.attrs["shape"]
+    x = origin[0] + (np.arange(shape[0]) + 0.5) * spacing[0]
+    y = origin[1] + (np.arange(shape[1]) + 0.5) * spacing[1]
+    p = np.asarray(g["pressure"])[0]  # (ny, nx)
+    cols = (x > REGION_X[0]) & (x < REGION_X[1])
+    return x[cols], y, p[:, cols], float(g.attrs["time"])
+
+
+def fig12(folder: Path, out: dict) -> None:
+    c, m = folder / "cfdmp-32.5us", folder / "mpm-32.5us"
+    if not ((c / "summary.json").exists() and (m / "summary.json").exists()):
+        return
+    sc, sm = _summary(c), _summary(m)
+    fig, axes = plt.subplots(1, 3, figsize=(12, 6), sharey=True)
+    panels = {}
+    for ax, (label, folder_k) in zip(axes, (("MPM everywhere", m), ("CFDMP", c))):
+        with _last_snapshot(folder_k) as snap:
+            x, y, p, t = _region_pressure(snap)
+        panels[label] = (x, y, p, t)
+    vmax = max(np.nanmax(p) for _, _, p, _ in panels.values()) / 1e6
+    for ax, (label, (x, y, p, t)) in zip(axes, panels.items()):
+        im = ax.pcolormesh(x * 1e3, y * 1e3, p / 1e6, vmin=0.0, vmax=vmax, shading="nearest", cmap="viridis")
+        ax.set_title(f"{label}, t = {t * 1e6:.1f} us"), ax.set_xlabel("x [mm]"), ax.set_aspect("equal")
+    axes[0].set_ylabel("y [mm]")
+    fig.colorbar(im, ax=axes[:2], label="pressure [MPa]")
+    (xm, y, pm, _), (xc, _, pc, _) = panels["MPM everywhere"], panels["CFDMP"]
+    row = np.argmin(np.abs(y - 0.25))
+    axes[2].remove()
+    ax = fig.add_subplot(1, 3, 3)
+    ax.plot(xm * 1e3, pm[row] / 1e6, label="MPM everywhere")
+    ax.plot(xc * 1e3, pc[row] / 1e6, "--", label="CFDMP")
+    ax.set_xlabel("x [mm]"), ax.set_ylabel("pressure [MPa] at y = 250 mm"), ax.legend(), ax.grid(alpha=0.3)
+    fig.savefig(HERE / "he_slab_2d_fig12.png", dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    both = np.isfinite(pm) & np.isfinite(pc)
+    out["fig12"] = {
+        "time": FIG12_TIME,
+        "cfdmp": {"steps": sc["steps"], "wall_time": sc["wall_time"], "compile_time": sc["compile_time"],
+                  "particles": sc["particles"]},
+        "mpm_everywhere": {"steps": sm["steps"], "wall_time": sm["wall_time"], "compile_time": sm["compile_time"],
+                           "particles": sm["particles"]},
+        "wall_time_ratio_mpm_over_cfdmp": sm["wall_time"] / sc["wall_time"],
+        "max_pressure_region": {"cfdmp": float(np.nanmax(pc)), "mpm_everywhere": float(np.nanmax(pm))},
+        "mean_abs_difference_over_mean_pressure": float(np.mean(np.abs(pm - pc)[both]) / np.mean(pc[both])),
+    }
+
+
+def slab(folder: Path, out: dict) -> None:
+    f = folder / "w5"
+    if not (f / "summary.json").exists():
+        return
+    with _last_snapshot(f) as snap:
+        P = snap["particles"]
+        on = np.asarray(P["structure"]) > 0.5
+        x = np.asarray(P["coordinates"])[on]
+        damage = np.asarray(P["damage"])[on]
+        s = np.asarray(P["stress"])[on].reshape(-1, 3, 3)
+        t = float(P.attrs["time"])
+    pressure = -np.trace(s, axis1=1, axis2=2) / 3.0
+    dev = s + pressure[:, None, None] * np.eye(3)
+    mises = np.sqrt(1.5 * np.sum(dev * dev, axis=(1, 2)))
+    fig, axes = plt.subplots(1, 3, figsize=(12, 6), sharey=True)
+    for ax, (value, label, cmap) in zip(axes, ((damage, "damage", "magma"), (pressure / 1e6, "pressure [MPa]", "coolwarm"),
+                                               (mises / 1e6, "von Mises stress [MPa]", "viridis"))):
+        sc = ax.scatter(x[:, 0] * 1e3, x[:, 1] * 1e3, c=value, s=4, cmap=cmap)
+        fig.colorbar(sc, ax=ax, label=label)
+        ax.set_xlabel("x [mm]"), ax.set_aspect("equal")
+    axes[0].set_ylabel("y [mm]")
+    fig.suptitle(f"he-slab-2d (w = 5): concrete slab at t = {t * 1e6:.0f} us")
+    fig.tight_layout()
+    fig.savefig(HERE / "he_slab_2d_slab.png", dpi=120)
+    plt.close(fig)
+    summary = _summary(f)["structures"]
+    front = x[:, 0] < np.median(x[:, 0])
+    cracked = damage >= 0.5
+    out["slab"] = {"time": t, **summary,
+                   "damaged_particles": int(cracked.sum()), "particles": int(on.sum()),
+                   "damaged_in_front_half": int((cracked & front).sum()),
+                   "damaged_in_back_half": int((cracked & ~front).sum()),
+                   "damaged_y_range": ([float(x[cracked, 1].min()), float(x[cracked, 1].max())] if cracked.any()
+                                       else None),
+                   "max_pressure": float(pressure.max()), "max_von_mises": float(mises.max())}
+
+
+def figures(folder: Path) -> None:
+    out: dict = {}
+    fig10_11(folder, out)
+    fig12(folder, out)
+    slab(folder, out)
+    (HERE / "he_slab_2d.json").write_text(json.dumps(out, indent=1))
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    what, folder = sys.argv[1], Path(sys.argv[2])
+    if what == "run":
+        run(folder, sys.argv[3:] or list(RUNS))
+    elif what == "figures":
+        figures(folder)
+    else:
+        raise SystemExit(__doc__)
