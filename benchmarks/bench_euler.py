@@ -25,7 +25,9 @@ rate over that bound. B: on a CPU the best of a STREAM-like copy and triad measu
 here (NumPy, one thread, and a jitted JAX kernel, all threads; each written byte counted
 once as in STREAM); on a GPU the nominal HBM bandwidth (--gpu-bandwidth, H100 SXM
 3.35e12 B/s) next to the measured one. Each row also gives the process CPU seconds per wall second of the timed runs
-(2.0 = both cores of this machine busy for us; less = other work shared the cores).
+(2.0 = both cores of this machine busy for us; less = other work shared the cores) and
+cell_steps_per_cpu_s, the cell-steps per process CPU second of all timed calls (less sensitive
+to other work on the machine than the wall-clock rate, but not a substitute for it).
 
 --profile N: through the public API only, a per-kernel trace of one step of each scheme at N^3
 (share of padding/concatenate kernels, the slowest kernels and their ns per output element) and the
@@ -127,12 +129,14 @@ def bench_3d(n, scheme, repeats, min_time, max_steps):
     args = (U, dt, params, jnp.asarray(steps, jnp.int32))
     load0, cpu0 = os.getloadavg()[0], time.process_time()
     walls = _time(compiled, args, repeats)
-    cpu_per_wall = (time.process_time() - cpu0) / sum(walls)
+    cpu_s = time.process_time() - cpu0
+    cpu_per_wall = cpu_s / sum(walls)
     out = compiled(*args)
     cells = n ** 3
     return {"size": n, "scheme": scheme, "dtype": str(U.dtype), "cells": cells, "steps": steps,
             "compile_s": compile_s, "walls_s": walls, "wall_s": min(walls),
             "cell_steps_per_s": cells * steps / min(walls),
+            "cell_steps_per_cpu_s": cells * steps * repeats / cpu_s,
             "temp_bytes_per_call": compiled.memory_analysis().temp_size_in_bytes,
             "finite": bool(jnp.all(jnp.isfinite(out))), "process_cpu_s_per_wall_s": cpu_per_wall,
             "loadavg_1min_before": load0, "loadavg_1min_after": os.getloadavg()[0]}
@@ -357,7 +361,8 @@ def section_3d(args, sizes, bandwidth):
                 print(f"{row['scheme']:>13} {row['dtype']:>8} {n:4d}^3  {row['cell_steps_per_s']:10.3e} cell-steps/s"
                       f"  ({row['steps']} steps, best {row['wall_s']:.2f} s, compile {row['compile_s']:.0f} s)"
                       f"  bound {row['bandwidth_bound_cell_steps_per_s']:.2e}  fraction {row['fraction_of_bound']:.3f}"
-                      f"  load {row['loadavg_1min_before']:.1f}, cpu/wall {row['process_cpu_s_per_wall_s']:.2f}",
+                      f"  load {row['loadavg_1min_before']:.1f}, cpu/wall {row['process_cpu_s_per_wall_s']:.2f}"
+                      f"  ({row['cell_steps_per_cpu_s']:.2e} per CPU-s)",
                       flush=True)
     return {"run": run_info(started), "rows": rows}
 

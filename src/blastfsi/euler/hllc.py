@@ -115,16 +115,20 @@ def _reconstructed(w, eos_r, lay):
 def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
     """HLLC flux rows and face velocity at the faces 0..n of one axis (face f between cells f-1, f).
 
-    z: rows [primitive rows (nw), rho e, c^2] with NG ghost cells on that axis.
+    z: rows [primitive rows (nw), rho e, c^2] with NG ghost cells on that axis (n + 2 NG cells;
+    n is cfg.shape[axis] or the extent of a block along it).
     """
-    n = cfg.shape[axis]
+    n = z[0].shape[axis] - 2 * NG
     tiny = jnp.finfo(z[0].dtype).tiny
-    z0, z1, z2, z3 = (tuple(shift(x, axis, s, n + 1) for x in z) for s in range(4))  # cells f-2, f-1, f, f+1
+    z1, z2 = (tuple(shift(x, axis, s, n + 1) for x in z) for s in (1, 2))  # cells f-1, f
     w_left, w_right = [], []
-    for a, b, c, d in zip(z0[:nw], z1[:nw], z2[:nw], z3[:nw]):
-        mid = c - b
-        w_left.append(b + 0.5 * van_leer(b - a, mid, tiny))
-        w_right.append(c - 0.5 * van_leer(mid, d - c, tiny))
+    for x, b, c in zip(z[:nw], z1[:nw], z2[:nw]):
+        # the limited slope of each cell -1..n once (it enters the left state of its upper face
+        # and the right state of its lower face)
+        jump = jnp.diff(x, axis=axis)  # between cells -2..n+1
+        slope = van_leer(shift(jump, axis, 0, n + 2), shift(jump, axis, 1, n + 2), tiny)
+        w_left.append(b + 0.5 * shift(slope, axis, 0, n + 1))
+        w_right.append(c - 0.5 * shift(slope, axis, 1, n + 1))
     e_left, c2_left, ok_left = _reconstructed(w_left, eos_r, lay)
     e_right, c2_right, ok_right = _reconstructed(w_right, eos_r, lay)
     ok = ok_left & ok_right
@@ -138,18 +142,30 @@ def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
     return hllc_flux(left, right, lay, axis)
 
 
-def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
-    """Semi-discrete right-hand side L(U) of a tuple of conservative rows; record (static): return
-    (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n."""
-    nm, dtype = lay.n, rows[0].dtype
-
+def primitive_rows(rows, eos_r, lay):
+    """Cell rows [phase densities, velocity, p, (alpha), rho e, c^2] that the reconstruction uses."""
     st = cell_state(rows, eos_r, lay)
-    cells = st.rho_k + st.velocity + (st.p,) + ((rows[lay.alpha],) if nm == 2 else ()) + (st.rho_e, st.c2)
-    nw, p = len(cells) - 2, cells[nm + lay.ndim]
+    return st.rho_k + st.velocity + (st.p,) + ((rows[lay.alpha],) if lay.n == 2 else ()) + (st.rho_e, st.c2)
+
+
+def rate(cells, rows, eos_r, cfg: Config, lay, halo_axis=None, record: bool = False):
+    """L(U) from the cell rows of :func:`primitive_rows` (see :func:`rhs`).
+
+    halo_axis: None (cells and rows span the grid), or the axis of a block (:func:`blocks`) along
+    which ``cells`` carry NG ghost cells each side (the padded grid's cells around the block) and
+    ``rows`` span the block.
+    """
+    nm, dtype = lay.n, rows[0].dtype
+    nw = len(cells) - 2
+    core = cells if halo_axis is None else tuple(
+        shift(x, halo_axis, NG, x.shape[halo_axis] - 2 * NG) for x in cells)
+    p = core[nm + lay.ndim]
     total, fluxes = [0.0] * lay.nvar, []
     for axis in range(lay.ndim):
-        n, nrm = cfg.shape[axis], lay.mom + axis
-        padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
+        nrm = lay.mom + axis
+        padded = cells if axis == halo_axis else tuple(
+            pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(core))
+        n = padded[0].shape[axis] - 2 * NG
         flux, u_face = axis_flux(padded, nw, eos_r, cfg, lay, axis)
         fluxes.append(flux)
         radial = axis == 0 and cfg.geometry != CARTESIAN
@@ -165,6 +181,37 @@ def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
                 div = div - rows[r] * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
             total[r] = total[r] - div / cfg.dx
     return (tuple(total), tuple(fluxes)) if record else tuple(total)
+
+
+def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
+    """Semi-discrete right-hand side L(U) of a tuple of conservative rows; record (static): return
+    (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n."""
+    return rate(primitive_rows(rows, eos_r, lay), rows, eos_r, cfg, lay, None, record)
+
+
+BLOCK_CELLS = 16384  # cells per block of a blocked stage (its temporaries stay in the L2 cache of a core)
+
+
+def blocks(cfg: Config):
+    """(blocking axis, planes per block) of a stage on a large grid, or None (one block).
+
+    The fluxes of a stage are evaluated block by block along the outermost axis (the axial axis
+    of an r-z grid, whose radial factors then span the block): each block needs only NG cells of
+    the padded primitive rows either side, its temporaries stay in cache, and the arithmetic of
+    every cell is that of the unblocked stage.
+    """
+    nd = len(cfg.shape)
+    if nd == 1:
+        return None
+    b = 0 if cfg.geometry == CARTESIAN else 1
+    m = cfg.shape[b]
+    plane = 1
+    for d, k in enumerate(cfg.shape):
+        plane *= k if d != b else 1
+    ch = max(1, min(m, BLOCK_CELLS // plane))
+    while m % ch:
+        ch -= 1
+    return None if ch == m else (b, ch)
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):
@@ -184,8 +231,23 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     def combine(i, start, now, rate):  # stage i, row by row: a_i start + (1 - a_i)(now + dt rate)
         return tuple(a[i] * x0 + (1.0 - a[i]) * (x + dt * k) for x0, x, k in zip(start, now, rate))
 
+    spec = blocks(cfg)
+
     def plain(i, rows):
-        return combine(i, rows0, rows, rhs(rows, eos_r, cfg, lay))
+        if spec is None:
+            return combine(i, rows0, rows, rhs(rows, eos_r, cfg, lay))
+        b, ch = spec
+        cells = tuple(pad(x, b, cfg.bc[b], NG, -1.0 if r == lay.n + b else None)
+                      for r, x in enumerate(primitive_rows(rows, eos_r, lay)))
+
+        def block(j, outs):  # outs: the stage result, written block by block over its input rows
+            start = j * ch
+            cut = lambda x: jax.lax.dynamic_slice_in_dim(x, start, ch, axis=b)  # noqa: E731
+            now = tuple(map(cut, outs))
+            halo = tuple(jax.lax.dynamic_slice_in_dim(x, start, ch + 2 * NG, axis=b) for x in cells)
+            new = combine(i, tuple(map(cut, rows0)), now, rate(halo, now, eos_r, cfg, lay, b))
+            return tuple(jax.lax.dynamic_update_slice_in_dim(o, x, start, axis=b) for o, x in zip(outs, new))
+        return jax.lax.fori_loop(0, cfg.shape[b] // ch, block, rows)
 
     if moved is None:
         return jnp.stack(jax.lax.fori_loop(0, 2, plain, rows0))

@@ -55,9 +55,9 @@ import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
-from blastfsi.euler.boundaries import pad, shift
+from blastfsi.euler.boundaries import extend, extend_coefficient, shift
 from blastfsi.euler.config import CARTESIAN, Config
-from blastfsi.euler.mixture import cell_state
+from blastfsi.euler.mixture import cell_state, pressure_velocity
 
 NG = 2  # ghost cells: theta (Eq. 4) of the cell next to a boundary face needs rho two cells out
 
@@ -70,35 +70,41 @@ def _fluxes(rows, p, un, lay, nrm):
 def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False):
     """One directional operator L_axis(dt) on a tuple of conservative rows (module docstring);
     c: sound speed of the state at the start of the full step. record (static): also return
-    the face transfers T (rows at faces 0..n of the axis, module docstring)."""
-    n, lam, nrm = cfg.shape[axis], dt / cfg.dx, lay.mom + axis
+    the face transfers T (rows at faces 0..n of the axis, module docstring).
+
+    Ghost cells are attached only where a stencil reaches past the grid, one cell deep: the
+    density (for theta), the rows (for D at the boundary faces), the viscosity coefficient
+    (boundaries.extend_coefficient, which equals k of the ghost cell without its density jumps)
+    and U_bar; the values are those of the two-cell padding of the paper's formulation.
+    """
+    n, lam, nrm, kinds = cfg.shape[axis], dt / cfg.dx, lay.mom + axis, cfg.bc[axis]
     dtype = rows[0].dtype
     radial = axis == 0 and cfg.geometry != CARTESIAN
 
-    # 000 Eqs. (3)-(5): adaptive viscosity on cells 0..n-1 (padded index p = cell + NG).
-    q = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nrm else None) for r, x in enumerate(rows + (c,)))
-    q, c = q[:-1], q[-1]
-    rho = q[0] if lay.n == 1 else q[0] + q[1]
-    nu = (jnp.abs(q[nrm] / rho) + c) * lam
-    jump = jnp.abs(shift(rho, axis, 1, n + 3) - shift(rho, axis, 0, n + 3))
-    d_lo, d_hi = shift(jump, axis, 0, n + 2), shift(jump, axis, 1, n + 2)  # cells -1..n
+    def ext(x, r, lo=1, hi=1):  # row r with ghost cells (the normal momentum changes sign in a mirror)
+        return extend(x, axis, kinds, lo, hi, -1.0 if r == nrm else None)
+
+    # 000 Eqs. (3)-(5): adaptive viscosity; cells 0..n-1, faces 0..n (face f between cells f-1 and f).
+    rho = rows[0] if lay.n == 1 else rows[0] + rows[1]
+    jump = jnp.abs(jnp.diff(ext(rho, 0), axis=axis))  # faces 0..n
+    d_lo, d_hi = shift(jump, axis, 0, n), shift(jump, axis, 1, n)
     theta = jnp.abs(d_hi - d_lo) / jnp.maximum(d_hi + d_lo, jnp.finfo(dtype).tiny)
-    k_cell = shift(nu * (1.0 - nu), axis, 1, n + 2) * theta
+    nu = (jnp.abs(rows[nrm] / rho) + c) * lam
+    k_cell = extend_coefficient(nu * (1.0 - nu) * theta, axis, kinds)  # cells -1..n
     k_face = 0.25 * (shift(k_cell, axis, 0, n + 1) + shift(k_cell, axis, 1, n + 1))  # 1/2 of the mean, faces 0..n
     if radial:
         gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
     ubar, visc = [], []
-    for x in q:
-        d = k_face * (shift(x, axis, 2, n + 1) - shift(x, axis, 1, n + 1))
+    for r, x in enumerate(rows):
+        d = k_face * jnp.diff(ext(x, r), axis=axis)
         visc.append(d)
         d_hi, d_lo = shift(d, axis, 1, n), shift(d, axis, 0, n)
-        ubar.append(shift(x, axis, 2, n) + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
+        ubar.append(x + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
     # the operator acts on U_bar with its own boundary values (one ghost cell each side: cells -1..n)
-    ubar = tuple(pad(x, axis, cfg.bc[axis], 1, -1.0 if r == nrm else None) for r, x in enumerate(ubar))
+    ubar = tuple(ext(x, r) for r, x in enumerate(ubar))
 
     # Richtmyer predictor at faces -1/2 .. n-1/2.
-    sb = cell_state(ubar, eos_r, lay)
-    p, un = sb.p, sb.velocity[axis]
+    p, un = pressure_velocity(ubar, eos_r, lay, axis)
     f = _fluxes(ubar, p, un, lay, nrm)
     if radial:
         src = 0.25 * lam * geometry.face_source_factor(cfg, 0, n + 1, dtype)
@@ -115,8 +121,7 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False)
     half = tuple(half)
 
     # Corrector on cells 0..n-1.
-    sh = cell_state(half, eos_r, lay)
-    ph, uh = sh.p, sh.velocity[axis]
+    ph, uh = pressure_velocity(half, eos_r, lay, axis)
     fh = _fluxes(half, ph, uh, lay, nrm)
     if radial:
         p_mid = 0.5 * (shift(ph, axis, 0, n) + shift(ph, axis, 1, n))  # pressure force at the half step
@@ -134,6 +139,46 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False)
     if record:
         return tuple(out), tuple(lam * fx - d for fx, d in zip(fh, visc))
     return tuple(out)
+
+
+BLOCK_CELLS = 32768  # cells per block of a blocked operator (its temporaries stay in the 2 MiB L2 of a core)
+
+
+def blocks(cfg: Config, axis: int):
+    """(blocking axis, planes per block) of the operator along ``axis``, or None (one block).
+
+    The operators along one axis are independent across the other axes, so a large grid is
+    swept block by block along the outermost other axis: the operator's many temporaries then
+    live in cache instead of main memory (about 1.5x faster at 128^3 on this CPU), and the
+    arithmetic of every cell is unchanged.
+    """
+    if len(cfg.shape) == 1:
+        return None
+    b = 0 if axis != 0 else 1
+    m = cfg.shape[b]
+    plane = 1
+    for d, k in enumerate(cfg.shape):
+        plane *= k if d != b else 1
+    ch = max(1, min(m, BLOCK_CELLS // plane))
+    while m % ch:
+        ch -= 1
+    return None if ch == m else (b, ch)
+
+
+def blocked(fn, ins, outs, cfg: Config, axis: int):
+    """fn(ins, outs) -> new outs, applied block by block (:func:`blocks`); the blocks of ``outs`` are
+    updated in place (ins and outs: tuples of arrays spanning the blocking axis)."""
+    spec = blocks(cfg, axis)
+    if spec is None:
+        return fn(ins, outs)
+    b, ch = spec
+
+    def body(j, outs):
+        start = j * ch
+        cut = lambda x: jax.lax.dynamic_slice_in_dim(x, start, ch, axis=b)  # noqa: E731
+        new = fn(tuple(map(cut, ins)), tuple(map(cut, outs)))
+        return tuple(jax.lax.dynamic_update_slice_in_dim(o, x, start, axis=b) for o, x in zip(outs, new))
+    return jax.lax.fori_loop(0, cfg.shape[b] // ch, body, tuple(outs))
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):
@@ -155,15 +200,20 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
 
     def body(a):  # the operator along axis a on the loop state
         def plain(rows):
-            return sweep(rows, c, 0.5 * dt, eos_r, cfg, lay, a)
+            return blocked(lambda cc, r: sweep(r, cc[0], 0.5 * dt, eos_r, cfg, lay, a), (c,), rows, cfg, a)
 
         if moved is None:
             return plain
 
+        def add_transfers(ins, acc):
+            _, t = sweep(ins[:-1], ins[-1], 0.5 * dt, eos_r, cfg, lay, a, record=True)
+            return tuple(m + x for m, x in zip(acc, t))
+
         def recording(state):  # the transfers of all axes are carried, those of axis a added to
             rows, acc = state
-            _, t = sweep(*jax.lax.optimization_barrier((rows, c)), 0.5 * dt, eos_r, cfg, lay, a, record=True)
-            return plain(rows), acc[:a] + (tuple(m + x for m, x in zip(acc[a], t)),) + acc[a + 1:]
+            rows_b, c_b = jax.lax.optimization_barrier((rows, c))
+            new_acc = blocked(add_transfers, rows_b + (c_b,), acc[a], cfg, a)
+            return plain(rows), acc[:a] + (new_acc,) + acc[a + 1:]
         return recording
 
     branches = [body(a) for a in range(ndim)]

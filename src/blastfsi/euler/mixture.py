@@ -140,6 +140,31 @@ def cell_state(rows, eos_r, lay) -> CellState:
     return CellState(rho, vel, p, sound_speed_squared(rho, p, ph), rho_e, tuple(rho_k))
 
 
+def cold_pressure(rho_k, row: JWLParams):
+    """f_k of one phase as in :func:`cold_terms` (without f_k'); zeros for an ideal gas."""
+    rr = jnp.maximum(rho_k, RHO_FLOOR_REL * row.rho0)
+    return jax.lax.cond((row.A == 0.0) & (row.B == 0.0), jnp.zeros_like, lambda r: reference_pressure(r, row), rr)
+
+
+def pressure_velocity(rows, eos_r, lay, axis):
+    """(p, u_axis) of conservative rows: the part of :func:`cell_state` a flux needs (no c^2)."""
+    n, ndim = lay.n, lay.ndim
+    partials = tuple(rows[k] for k in range(n))
+    rho = partials[0] if n == 1 else partials[0] + partials[1]
+    inv_rho = 1.0 / rho
+    vel = tuple(rows[lay.mom + d] * inv_rho for d in range(ndim))
+    kinetic = 0.5 * sum(rows[lay.mom + d] * vel[d] for d in range(ndim))
+    rho_e = rows[lay.energy] - kinetic
+    alphas = volume_fractions(rows[lay.alpha] if n == 2 else None, n)
+    rho_k = phase_densities(partials, alphas)
+    xi = s_f = 0.0
+    for r, a, row in zip(rho_k, alphas, eos_r):
+        inv_g = 1.0 / row.omega
+        xi = xi + a * inv_g
+        s_f = s_f + a * cold_pressure(r, row) * inv_g
+    return (rho_e + s_f) / xi, vel[axis]
+
+
 def closure_from_pressure(rho_k, alpha, p, eos_r, n):
     """(partial densities, rho, rho e, c^2) of phase densities, products fraction and pressure."""
     alphas = volume_fractions(alpha, n)
