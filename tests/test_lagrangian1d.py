@@ -170,3 +170,17 @@ def test_gauges_see_the_incident_shock_and_its_impulse():
         # smeared shock of ~3 zones shifts the impulse by ~ 3 dx / U_s * p_s / 2
         assert summ["gauge_impulse"][k] == pytest.approx(ps * (t_end - x / s.shock_speed), rel=0.02)
         assert summ["gauge_peak_overpressure"][k] == pytest.approx(ps, rel=0.05)
+
+
+@pytest.mark.parametrize("zones", [100, 8000, 20000])
+def test_stable_dt_flags_a_nan_zone_on_long_grids(zones):
+    """The time-step reduction is the fault check: one NaN zone anywhere gives a NaN step (XLA:CPU's
+    vectorised min does not propagate NaN on long arrays: found on 6400-zone detonation runs that ran on
+    with a NaN state)."""
+    num = scheme.Numerics(*(jnp.asarray(v) for v in (1.4, 1.5, 0.06, 0.5)))
+    dx = jnp.full(zones, 1e-3)
+    v = jnp.zeros(zones + 1)
+    for bad in (0, zones // 2 + 3, zones - 1):
+        a = jnp.full(zones, 340.0).at[bad].set(jnp.nan)
+        assert np.isnan(float(jax.jit(scheme.stable_dt)(dx, a, v, num)))
+    assert float(jax.jit(scheme.stable_dt)(dx, jnp.full(zones, 340.0), v, num)) == pytest.approx(0.5e-3 / 340.0)

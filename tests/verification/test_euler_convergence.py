@@ -183,11 +183,27 @@ def test_smooth_advection_order(scheme, ndim, grids):
     grids is >= 1.8 in 1D and 2D. LW's adaptive viscosity (Eqs. 3-5) has |theta| = O(1) in an
     O(dx) band around each extremum, where it clips at first order; the L1 order approaches 2
     from below (1D: 1.39, 1.81, 1.84 at 32..256 cells), so 3D, affordable here only at 32 and
-    64 cells, is held to >= 1.3 (pre-asymptotic) and printed."""
+    64 cells, is held to >= 1.3 (pre-asymptotic) and printed; finer 3D levels:
+    test_smooth_advection_order_3d_finer."""
     errors = np.array([advected_wave_error(n, ndim, scheme) for n in grids])
     orders = np.log2(errors[:-1] / errors[1:])
     print(f"scheme {scheme} {ndim}D: L1 errors {errors.tolist()} orders {orders.tolist()}")
     assert orders[-1] >= (1.8 if ndim < 3 else 1.3), orders
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scheme, grids", [(euler.LAX_WENDROFF, (64, 96)), (euler.HLLC_MUSCL, (64, 80))])
+def test_smooth_advection_order_3d_finer(scheme, grids):
+    """Issue 5 item 2: the 3D diagonal wave of test_smooth_advection_order on finer grids (LW 64 -> 96:
+    ~7 min, HLLC 64 -> 80: ~15 min on the shared 2-core CPU; measured 1.41 and 1.81). Measured L1 errors and orders in
+    docs/euler.md (Verification, item 2). Held to the pre-asymptotic >= 1.3 of the 32 -> 64 pair; the
+    >= 1.8 target of issue 5 is reported as an xfail while it is not reached."""
+    errors = np.array([advected_wave_error(n, 3, scheme) for n in grids])
+    order = np.log(errors[0] / errors[1]) / np.log(grids[1] / grids[0])
+    print(f"scheme {scheme} 3D: L1 errors {errors.tolist()} at {grids}, order {order}")
+    assert order >= 1.3, order
+    if order < 1.8:
+        pytest.xfail(f"3D order {order:.2f} < 1.8 at {grids[0]} -> {grids[1]} cells (issue 5 target not reached)")
 
 
 # --- two materials ----------------------------------------------------------------------------------

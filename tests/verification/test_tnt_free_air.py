@@ -14,11 +14,15 @@ pytestmark = pytest.mark.slow
 Z = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0)
 
 
-def cj_ratio(geometry, cells):
+def cj_run(geometry, cells):
     d = {"method": "lagrangian1d", "name": "cj", "charge": {"radius": 0.05},
          "domain": {"geometry": geometry, "length": 0.2}, "grid": {"cells": cells, "first_ratio": 1.0},
          "time": {"end": 0.05 / 6930.0 * 1.02}, "output": {"history_samples": 2, "fields": 0, "plots": False}}
-    return blastfsi.run(d).summary["burn_front_pressure_ratio"]
+    return blastfsi.run(d)
+
+
+def cj_ratio(geometry, cells):
+    return cj_run(geometry, cells).summary["burn_front_pressure_ratio"]
 
 
 def test_planar_burn_reaches_the_cj_pressure():
@@ -31,13 +35,25 @@ def test_planar_burn_reaches_the_cj_pressure():
 
 def test_spherical_burn_front_converges_to_cj_like_sqrt_h():
     # spherical: the Taylor wave's gradient is singular at the CJ point, so a front smeared over a
-    # few zones sits below p_CJ by ~ (h/R)^(1/2): measured 0.830, 0.869, 0.903, 0.933 at 200..1600
-    ratios = np.array([cj_ratio("spherical", n) for n in (200, 400, 800, 1600)])
+    # few zones sits below p_CJ by ~ (h/R)^(1/2): measured 0.830, 0.869, 0.903, 0.933, 0.959 at
+    # 200..3200 zones (pairwise orders of 1 - ratio 0.38, 0.43, 0.53, 0.71, rising: the limit of the
+    # programmed burn at D = 6930 m/s, 2 m/s above D_CJ, is the strong point 1.034 p_CJ, not p_CJ).
+    # The 5 % target is met at 3200 zones (4.1 %), not at 1600 (6.7 %).
+    ratios = np.array([cj_ratio("spherical", n) for n in (200, 400, 800, 1600, 3200)])
     err = 1 - ratios
     assert np.all(np.diff(err) < 0)
     order = np.log2(err[:-1] / err[1:])
     assert np.all((order > 0.3) & (order < 0.8))
-    assert err[-1] < 0.08  # the 5 % target is not reached at 1600 zones (6.7 %)
+    assert err[-2] > 0.05 and err[-1] < 0.05
+
+
+@pytest.mark.xfail(strict=True, reason="lagrangian1d at 6400 zones across R: the state turns NaN near the "
+                   "burn front at ~0.9 R (t ~ 6.5 us) and the run is not stopped (stable_dt's jnp.min drops NaN "
+                   "on large arrays, so no fault is raised); the summary's energy error is NaN")
+def test_spherical_burn_front_at_6400_zones_stays_finite_and_within_five_percent():
+    summary = cj_run("spherical", 6400).summary
+    assert np.isfinite(summary["energy_error_relative"])
+    assert abs(summary["burn_front_pressure_ratio"] - 1) < 0.05
 
 
 COARSE, FINE = 20.0, 5.0  # max_ratio = first_ratio: 10.5 mm and 2.6 mm air zones; shipped: 10 (5.3 mm)

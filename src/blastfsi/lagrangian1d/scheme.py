@@ -238,8 +238,10 @@ def zone_dt(dx, a, v, num: Numerics):
 def stable_dt(dx, a, v, num: Numerics):
     """The smallest :func:`zone_dt`. NaN (NaN or negative energy somewhere) or
     <= 0 (a tangled zone) exactly when the state is non-physical, so the
-    time-step reduction doubles as the fault check."""
-    return jnp.min(zone_dt(dx, a, v, num))
+    time-step reduction doubles as the fault check. (The NaN is set explicitly: XLA:CPU's vectorised min
+    reduction does not propagate NaN on long arrays; seen at 8000 zones, where a NaN state ran on.)"""
+    dt = zone_dt(dx, a, v, num)
+    return jnp.where(jnp.all(jnp.isfinite(dt)), jnp.min(dt), jnp.nan)
 
 
 def viscous_pressure(rho_mid, dv, a, num: Numerics):
