@@ -138,3 +138,23 @@ def test_trace_materials_get_the_mixture_state():
     for k in range(2):
         assert rho[k, 1] == pytest.approx(float(rho_k[k, 1]), rel=1e-12)
         assert float(jwl.pressure(rho[k, 1], e[k, 1], rows[k])) == pytest.approx(2.0e5, rel=1e-10)
+
+
+def test_gas_at_rest_stays_at_rest_on_outflow_box_faces():
+    """A 2D box whose faces lie on outflow faces of the domain (the he-slab-2d layout): the mirror gas of
+    ``outflow_ghost`` (mass, momentum and traction on those faces' nodes) balances the particles' stress.
+
+    Not to round-off: after 200 us the largest disturbance is 2.3e-5 p, at the box corner on the domain
+    corner (a known imperfection, not a derived error bound; the bound below is 4x it). The traction
+    without the mirror mass let this gas at rest run away (non-physical state at 197 us, step 843)."""
+    state = {"material": "air", "density": 1.2, "pressure": 1.0e5}
+    d = {"method": "cfdmp", "name": "rest-2d", "domain": {"lower": [0.0, 0.0], "upper": [0.06, 0.03]},
+         "boundaries": {"x": ["outflow", "outflow"], "y": ["outflow", "outflow"]}, "grid": {"cells": 30},
+         "initial": {"kind": "riemann", "diaphragm": 0.02, "left": state, "right": state},
+         "mpm_region": {"lower": [0.03, 0.0], "upper": [0.06, 0.03], "activation_overpressure": 0.0},
+         "time": {"end": 2.0e-4}, "output": {"history_samples": 11, "fields": 0, "plots": False}}
+    res = blastfsi.run(d)
+    f = res.fields()
+    assert res.summary["steps"] > 40
+    assert np.nanmax(np.abs(f["pressure"] - 1.0e5)) < 1e-4 * 1.0e5
+    assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14

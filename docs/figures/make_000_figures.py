@@ -5,12 +5,18 @@
 
 Runs (all through ``blastfsi.run``, the shipped examples with the overrides named):
 
-* ``w2``, ``w5``, ``w8``: ``he-slab-2d`` with ``mpm_region.bridge_cells`` = 2, 5, 8 to the example's end
-  (80 us): the two symmetric gauges (Fig. 10 for w = 5, Fig. 11 for the others) and the slab at the end;
+* ``w5``: ``he-slab-2d`` to its end (80 us), checkpoints every 4 us: the two symmetric gauges (Fig. 10)
+  and the slab at the end; ``field-at`` continues a checkpoint to the time of Fig. 12;
+* ``w2``, ``w8``: the same with ``mpm_region.bridge_cells`` = 2, 8 to 50 us (Fig. 11): the gauges' peak,
+  arrival and positive phase are over by then (the JSON gives each positive-phase duration to check);
 * ``cfdmp-32.5us``, ``mpm-32.5us``: ``he-slab-2d`` and ``he-slab-2d-mpm`` to 32.5 us, the time of Fig. 12,
   with the final field written: pressure in the interaction region side by side, and the wall times.
 
-Every number in docs/cfdmp.md about he-slab-2d comes from the JSON this writes.
+    python docs/figures/make_000_figures.py field-at DIR RUN TIME OUT   # RUN's fields at TIME from a checkpoint
+    python docs/figures/make_000_figures.py step-cost DIR              # s per step of both Fig. 12 set-ups
+
+No run has reached its end yet (docs/cfdmp.md, he-slab-2d status): the numbers there come from the
+checkpoints of ``w5``, not from this script's JSON.
 """
 from __future__ import annotations
 
@@ -29,9 +35,9 @@ HERE = Path(__file__).parent
 FIG12_TIME = 32.5e-6  # s, 000 Fig. 12
 REGION_X = (0.110, 0.160)  # m, the MPM (interaction) region of 000 Sec. 5.2
 RUNS = {
-    "w2": ("he-slab-2d", {"mpm_region.bridge_cells": 2}),
-    "w5": ("he-slab-2d", {}),
-    "w8": ("he-slab-2d", {"mpm_region.bridge_cells": 8}),
+    "w2": ("he-slab-2d", {"mpm_region.bridge_cells": 2, "time.end": 5.0e-5, "output.history_samples": 251}),
+    "w5": ("he-slab-2d", {"output.checkpoint_interval": 4.0e-6}),
+    "w8": ("he-slab-2d", {"mpm_region.bridge_cells": 8, "time.end": 5.0e-5, "output.history_samples": 251}),
     "cfdmp-32.5us": ("he-slab-2d", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
     "mpm-32.5us": ("he-slab-2d-mpm", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
 }
@@ -44,6 +50,65 @@ def run(folder: Path, names) -> None:
         example, overrides = RUNS[name]
         res = blastfsi.run(example, set=overrides, out=folder / name)
         print(name, json.dumps({k: res.summary[k] for k in ("steps", "wall_time", "compile_time")}), flush=True)
+
+
+def _restored(folder: Path, name: str, time: float | None):
+    """(method, setup, static, state, params, scalars) of run ``name``: its initial state, or (``time``) its
+    last checkpoint at or before ``time``."""
+    import jax.numpy as jnp
+
+    from blastfsi import api, method as methods, simulation
+    from blastfsi.scenario import expand
+
+    example, overrides = RUNS[name]
+    sc, _, scs = expand(api.load(example, set=overrides))
+    method = methods.get(sc.method)
+    setup = method.build(scs[0])
+    static = method.static(setup, scs[0])
+    n = sc.output.history_samples
+    state = simulation._stack([method.initial_state(setup, scs[0], n, jnp.float64)], "state")
+    params = simulation._stack([method.params(setup, jnp.float64)], "params")
+    if time is not None:
+        _, ckpt_times, _ = simulation.stop_times(sc)
+        k = max(i for i, t in enumerate(ckpt_times) if t <= time)
+        state = simulation._restore(folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5", state)
+    scalars = (20_000, sc.time.end / (n - 1), sc.time.dt_min_fraction)
+    advance, _ = simulation.compiled_advance(method, static, state, params, sc.time.end, *scalars)
+    return method, setup, advance, state, params, scalars
+
+
+def field_at(folder: Path, name: str, time: float, out: Path) -> None:
+    """The fields of run ``name`` at ``time``, continued from its last checkpoint before ``time`` (for a
+    run whose snapshots miss that time): written to ``out``/fields with ``out``/summary.json (steps)."""
+    from blastfsi import simulation
+    from blastfsi.io import results
+
+    method, setup, advance, state, params, scalars = _restored(folder, name, time)
+    t0 = float(state.t[0])
+    state = advance(state, params, time, *scalars)
+    member = simulation._members(state)[0]
+    results.write_snapshot(out, 0, time, [method.snapshot(member, setup)])
+    (out / "summary.json").write_text(json.dumps({"steps": int(member.step), "time": float(member.t),
+                                                  "continued_from": t0}))
+
+
+def step_cost(folder: Path, name: str, time: float | None, steps: int = 20) -> dict:
+    """Wall and CPU seconds per step of run ``name`` at its checkpoint before ``time`` (or its start),
+    compiled once, best of three calls of ``steps`` steps (measure on an otherwise idle machine)."""
+    import time as clock
+
+    import jax
+
+    method, setup, advance, state, params, (_, interval, floor) = _restored(folder, name, time)
+    state = jax.block_until_ready(advance(state, params, float("inf"), 2, interval, floor))
+    best = None
+    for _ in range(3):
+        w, c = clock.perf_counter(), clock.process_time()
+        state = jax.block_until_ready(advance(state, params, float("inf"), steps, interval, floor))
+        w, c = (clock.perf_counter() - w) / steps, (clock.process_time() - c) / steps
+        best = (w, c) if best is None or w < best[0] else best
+    return {"run": name, "at": float(state.t[0]), "particles": int(state.mpm.particles.active.sum()),
+            "wall_s_per_step": best[0], "cpu_s_per_step": best[1]}
 
 
 def _summary(folder: Path) -> dict:
@@ -62,8 +127,9 @@ def _last_snapshot(folder: Path):
 
 
 def gauge_metrics(summary: dict) -> list[dict]:
-    return [{k: g[k] for k in ("position", "region", "peak_overpressure", "impulse", "arrival_time")}
-            for g in summary["gauges"]]
+    keys = ("position", "region", "peak_overpressure", "impulse", "arrival_time", "positive_phase_duration")
+    return [{k: g[k] for k in keys} | {"positive_phase_over": g["arrival_time"] + g["positive_phase_duration"]
+                                        < summary["time"]} for g in summary["gauges"]]
 
 
 def symmetry(gauges: list[dict]) -> dict:
@@ -138,14 +204,16 @@ def fig12(folder: Path, out: dict) -> None:
     both = np.isfinite(pm) & np.isfinite(pc)
     out["fig12"] = {
         "time": FIG12_TIME,
-        "cfdmp": {"steps": sc["steps"], "wall_time": sc["wall_time"], "compile_time": sc["compile_time"],
-                  "particles": sc["particles"]},
-        "mpm_everywhere": {"steps": sm["steps"], "wall_time": sm["wall_time"], "compile_time": sm["compile_time"],
-                           "particles": sm["particles"]},
-        "wall_time_ratio_mpm_over_cfdmp": sm["wall_time"] / sc["wall_time"],
+        "steps": {"cfdmp": sc["steps"], "mpm_everywhere": sm["steps"]},
+        "wall_time_of_the_runs": {"cfdmp": sc.get("wall_time"), "mpm_everywhere": sm.get("wall_time")},
         "max_pressure_region": {"cfdmp": float(np.nanmax(pc)), "mpm_everywhere": float(np.nanmax(pm))},
         "mean_abs_difference_over_mean_pressure": float(np.mean(np.abs(pm - pc)[both]) / np.mean(pc[both])),
     }
+    if (folder / "step_cost.json").exists():
+        cost = {c["run"]: c for c in json.loads((folder / "step_cost.json").read_text())}
+        c_c, c_m = cost["w5"]["wall_s_per_step"], cost["mpm-32.5us"]["wall_s_per_step"]
+        out["fig12"]["step_cost"] = list(cost.values())
+        out["fig12"]["estimated_wall_time_ratio_mpm_over_cfdmp"] = sm["steps"] * c_m / (sc["steps"] * c_c)
 
 
 def slab(folder: Path, out: dict) -> None:
@@ -198,6 +266,12 @@ if __name__ == "__main__":
     what, folder = sys.argv[1], Path(sys.argv[2])
     if what == "run":
         run(folder, sys.argv[3:] or list(RUNS))
+    elif what == "field-at":  # field-at DIR RUN TIME OUT
+        field_at(folder, sys.argv[3], float(sys.argv[4]), Path(sys.argv[5]))
+    elif what == "step-cost":  # step-cost DIR: both Fig. 12 configurations, to DIR/step_cost.json
+        costs = [step_cost(folder, "w5", 2.4e-5), step_cost(folder, "mpm-32.5us", None)]
+        (folder / "step_cost.json").write_text(json.dumps(costs, indent=1))
+        print(json.dumps(costs, indent=1))
     elif what == "figures":
         figures(folder)
     else:

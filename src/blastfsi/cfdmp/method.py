@@ -243,8 +243,7 @@ class Cfdmp:
             return s, s.U
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, mpm.musl.NodalSource(
-                0.0, 0.0, cp.outflow_traction(s.mpm.particles, lay, cs)))
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.outflow_ghost(s.mpm.particles, lay, cs))
             U, ms, budget = cp.remove_leaving(s.U, ms, s.budget, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
             return s._replace(U=U, mpm=ms, budget=budget), cp.view(U, rows, gas_volume, lay)
