@@ -7,6 +7,8 @@ driver. Small grids; the 1D configurations share one compiled time loop.
   reflected by the bridge back into the Eulerian region below 2 % of the incident pressure jump (issue 8);
 * bad input: clear errors naming the key.
 """
+import json
+
 import numpy as np
 import pytest
 
@@ -157,4 +159,6 @@ def test_gas_at_rest_stays_at_rest_on_outflow_box_faces():
     f = res.fields()
     assert res.summary["steps"] > 40
     assert np.nanmax(np.abs(f["pressure"] - 1.0e5)) < 1e-4 * 1.0e5
+    assert res.summary["bridge_cells"] == 5 and isinstance(res.summary["bridge_cells"], int)  # (was an array)
+    json.dumps(res.summary)  # the summary.json of a results directory
     assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14

@@ -278,10 +278,10 @@ def build(sc: CfdmpScenario) -> Setup:
                 continue
             area = np.ones(())
             for a in range(nd):
-                w = np.ones(1) if a == ax else np.full(grid.nodes[a], dx)
+                share = np.ones(1) if a == ax else np.full(grid.nodes[a], dx)
                 if a != ax:
-                    w[[0, -1]] *= 0.5
-                area = np.multiply.outer(area, w)
+                    share[[0, -1]] *= 0.5
+                area = np.multiply.outer(area, share)
             sl = [slice(None)] * nd
             sl[ax] = slice(0, 1) if side == 0 else slice(-1, None)
             outflow_area[tuple(sl) + (ax,)] = -sign * area
