@@ -337,7 +337,6 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     inflow = jnp.sum(m_k, axis=0) > 0.0
     donor = jnp.where(inflow, layout.face_out, layout.face_in)
     u = prim_flat["velocity"][:, donor]  # (d, F)
-    p = prim_flat["pressure"][donor]
     rho_k, e_k = trusted_phases(prim_flat, donor, eos, n)
     ke = 0.5 * jnp.sum(u * u, axis=0)
     carried_mom = jnp.sum(m_k, axis=0)[None] * u

@@ -37,7 +37,7 @@ import jax.numpy as jnp
 
 from blastfsi.euler import geometry
 from blastfsi.euler.boundaries import pad, shift
-from blastfsi.euler.config import CARTESIAN, Config
+from blastfsi.euler.config import CARTESIAN, Config, block_plan
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
 
 NG = 2
@@ -203,15 +203,7 @@ def blocks(cfg: Config):
     nd = len(cfg.shape)
     if nd == 1:
         return None
-    b = 0 if cfg.geometry == CARTESIAN else 1
-    m = cfg.shape[b]
-    plane = 1
-    for d, k in enumerate(cfg.shape):
-        plane *= k if d != b else 1
-    ch = max(1, min(m, BLOCK_CELLS // plane))
-    while m % ch:
-        ch -= 1
-    return None if ch == m else (b, ch)
+    return block_plan(cfg.shape, 0 if cfg.geometry == CARTESIAN else 1, BLOCK_CELLS)
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):

@@ -56,7 +56,7 @@ import jax.numpy as jnp
 
 from blastfsi.euler import geometry
 from blastfsi.euler.boundaries import extend, extend_coefficient, shift
-from blastfsi.euler.config import CARTESIAN, Config
+from blastfsi.euler.config import CARTESIAN, Config, block_plan
 from blastfsi.euler.mixture import cell_state, pressure_velocity
 
 NG = 2  # ghost cells: theta (Eq. 4) of the cell next to a boundary face needs rho two cells out
@@ -154,15 +154,7 @@ def blocks(cfg: Config, axis: int):
     """
     if len(cfg.shape) == 1:
         return None
-    b = 0 if axis != 0 else 1
-    m = cfg.shape[b]
-    plane = 1
-    for d, k in enumerate(cfg.shape):
-        plane *= k if d != b else 1
-    ch = max(1, min(m, BLOCK_CELLS // plane))
-    while m % ch:
-        ch -= 1
-    return None if ch == m else (b, ch)
+    return block_plan(cfg.shape, 0 if axis != 0 else 1, BLOCK_CELLS)
 
 
 def blocked(fn, ins, outs, cfg: Config, axis: int):

@@ -124,8 +124,8 @@ class CellState(NamedTuple):
     rho_k: tuple
 
 
-def cell_state(rows, eos_r, lay) -> CellState:
-    """Primitive quantities of conservative rows (stacked, in the layout of config.Layout)."""
+def _kinematics(rows, lay):
+    """(partials, rho, velocity, rho e, volume fractions, phase densities) of conservative rows."""
     n, ndim = lay.n, lay.ndim
     partials = tuple(rows[k] for k in range(n))
     rho = partials[0] if n == 1 else partials[0] + partials[1]
@@ -134,7 +134,12 @@ def cell_state(rows, eos_r, lay) -> CellState:
     kinetic = 0.5 * sum(rows[lay.mom + d] * vel[d] for d in range(ndim))
     rho_e = rows[lay.energy] - kinetic
     alphas = volume_fractions(rows[lay.alpha] if n == 2 else None, n)
-    rho_k = phase_densities(partials, alphas)
+    return partials, rho, vel, rho_e, alphas, phase_densities(partials, alphas)
+
+
+def cell_state(rows, eos_r, lay) -> CellState:
+    """Primitive quantities of conservative rows (stacked, in the layout of config.Layout)."""
+    partials, rho, vel, rho_e, alphas, rho_k = _kinematics(rows, lay)
     ph = phase_sums(rho_k, partials, alphas, eos_r)
     p = pressure(rho_e, ph)
     return CellState(rho, vel, p, sound_speed_squared(rho, p, ph), rho_e, tuple(rho_k))
@@ -148,15 +153,7 @@ def cold_pressure(rho_k, row: JWLParams):
 
 def pressure_velocity(rows, eos_r, lay, axis):
     """(p, u_axis) of conservative rows: the part of :func:`cell_state` a flux needs (no c^2)."""
-    n, ndim = lay.n, lay.ndim
-    partials = tuple(rows[k] for k in range(n))
-    rho = partials[0] if n == 1 else partials[0] + partials[1]
-    inv_rho = 1.0 / rho
-    vel = tuple(rows[lay.mom + d] * inv_rho for d in range(ndim))
-    kinetic = 0.5 * sum(rows[lay.mom + d] * vel[d] for d in range(ndim))
-    rho_e = rows[lay.energy] - kinetic
-    alphas = volume_fractions(rows[lay.alpha] if n == 2 else None, n)
-    rho_k = phase_densities(partials, alphas)
+    _, _, vel, rho_e, alphas, rho_k = _kinematics(rows, lay)
     xi = s_f = 0.0
     for r, a, row in zip(rho_k, alphas, eos_r):
         inv_g = 1.0 / row.omega
