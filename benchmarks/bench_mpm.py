@@ -29,17 +29,9 @@ import sys
 import time
 from pathlib import Path
 
+from bench_euler import _time  # same folder: the one timing loop of the benchmarks
+
 HERE = Path(__file__).resolve().parent
-
-
-def _time(fn, args, repeats):
-    import jax
-    walls = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        walls.append(time.perf_counter() - t0)
-    return walls
 
 
 def setup(cells: int, combined):

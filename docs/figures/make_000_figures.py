@@ -181,7 +181,7 @@ def fig12(folder: Path, out: dict) -> None:
     sc, sm = _summary(c), _summary(m)
     fig, axes = plt.subplots(1, 3, figsize=(12, 6), sharey=True)
     panels = {}
-    for ax, (label, folder_k) in zip(axes, (("MPM everywhere", m), ("CFDMP", c))):
+    for label, folder_k in (("MPM everywhere", m), ("CFDMP", c)):
         with _last_snapshot(folder_k) as snap:
             x, y, p, t = _region_pressure(snap)
         panels[label] = (x, y, p, t)

@@ -231,8 +231,9 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static) -> mpm.musl.
     free MPM face would be. The particles give such a node only the half of its support inside the box; the
     mirror half adds the same mass and momentum (so the node keeps the particles' velocity and the inertia of
     a full support) and the traction -p_I A n, p_I the mass-weighted pressure of the gas particles around
-    the node (a node on k such faces: 2^k - 1 mirrors). Without the mirror mass a rarefied node (gas blown past a slab's corner) took the whole
-    traction on a sliver of mass and the gas behind the he-slab-2d slab ran away to 1e6 m/s at 24.5 us."""
+    the node (a node on k such faces: 2^k - 1 mirrors). Without the mirror mass a rarefied node (gas blown
+    past a slab's corner) took the whole traction on a sliver of mass, and a gas at rest in such a box ran
+    away (tests/test_cfdmp.py)."""
     cfg = static.mpm
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
@@ -248,7 +249,8 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static) -> mpm.musl.
     mirrors = 2.0 ** jnp.sum(layout.outflow_area != 0.0, axis=1) - 1.0
     m_node = nodal[:, 0]
     p_node = jnp.where(m_node > 0.0, nodal[:, 1] / jnp.where(m_node > 0.0, m_node, 1.0), 0.0)
-    return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * nodal[:, 2:], p_node[:, None] * layout.outflow_area)
+    return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * nodal[:, 2:],
+                                p_node[:, None] * layout.outflow_area)
 
 
 def interface_source(prim_flat: dict, layout: Layout, static: Static, P: mpm.Particles) -> mpm.musl.NodalSource:
@@ -297,15 +299,11 @@ def trusted_phases(prim_flat: dict, cells, eos, n: int):
     internal energy instead: its own phase density is numerical noise there (the scheme's diffusion leaves
     traces down to ~1e-200 kg/m3 with volume fractions down to ~1e-300), and e_k = (p - f_k)/(G_k rho_k)
     overflows. Any split of a transfer between the materials keeps the budget, which books their sum."""
-    rows = eos_rows(eos, n)
-    p = prim_flat["pressure"][cells]
-    rho_k, e_k = [], []
-    for k in range(n):
-        trusted = prim_flat["mass_fraction"][k][cells] >= PRESENT
-        r = jnp.where(trusted, prim_flat["rho_k"][k][cells], 1.0)
-        e = phase_energy([r], p, [rows[k]])[0]
-        rho_k.append(jnp.where(trusted, r, prim_flat["rho"][cells]))
-        e_k.append(jnp.where(trusted, e, prim_flat["internal_energy"][cells]))
+    trusted = [prim_flat["mass_fraction"][k][cells] >= PRESENT for k in range(n)]
+    own = [jnp.where(t, prim_flat["rho_k"][k][cells], 1.0) for k, t in enumerate(trusted)]
+    e_own = phase_energy(own, prim_flat["pressure"][cells], eos_rows(eos, n))
+    rho_k = [jnp.where(t, r, prim_flat["rho"][cells]) for t, r in zip(trusted, own)]
+    e_k = [jnp.where(t, e, prim_flat["internal_energy"][cells]) for t, e in zip(trusted, e_own)]
     return rho_k, e_k
 
 
@@ -501,9 +499,10 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
 
 def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: Static, layout: Layout):
     """The gas of the box becomes particles (000 Sec. 3, activation): one particle per lattice point and
-    material present (at least PRESENT of the cell's mass), mass = partial density x lattice volume, the cell's velocity, the phase density and
-    the phase internal energy at the cell pressure (so the cell's mass, momentum and energy carry over
-    exactly). Returns the new state and the number of active particles needed."""
+    material present (at least PRESENT of the cell's mass), mass = partial density x lattice volume, the
+    cell's velocity, the phase density and the phase internal energy at the cell pressure (so the cell's
+    mass, momentum and energy carry over exactly). Returns the new state and the number of active particles
+    needed."""
     cfg, d = static.euler, static.mpm.grid.dim
     n = cfg.n_materials
     cell = layout.gas_cell
