@@ -37,7 +37,8 @@ RUNS = {
     "w2": ("he-slab-2d", {"mpm_region.bridge_cells": 2}),
     "w5": ("he-slab-2d", {"output.checkpoint_interval": 4.0e-6}),
     "w8": ("he-slab-2d", {"mpm_region.bridge_cells": 8}),
-    "cfdmp-32.5us": ("he-slab-2d", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
+    "cfdmp-32.5us": ("he-slab-2d", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131,
+                                    "output.checkpoint_interval": 2.5e-6}),
     "mpm-32.5us": ("he-slab-2d-mpm", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
 }
 

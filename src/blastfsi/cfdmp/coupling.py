@@ -33,11 +33,13 @@ particle masses). One coupled step (000 Sec. 3.5, the 14 steps regrouped):
      first bridge cell, in the layer the gas occupies next to the face
      (Eq. 47), with the donor phase density and the reservoir's velocity and
      internal energy (Eq. 48 generalised: e = E/m - |v|^2/2);
-   * a gas particle that leaves the box through a coupled face is deleted and
-     its mass, momentum and energy (Eqs. 49-51) go to the reservoir of the face
-     cell it crossed (the Eulerian cell there already received the scheme's
-     transfer, so the reservoir records the MPM side's repayment); through a
-     face on the domain boundary it leaves the run (``boundary_out``).
+   * through a face where the gas leaves the box, the Eulerian cell outside
+     keeps the scheme's transfer and its convective part becomes a debt of the
+     face's reservoir; a gas particle that leaves the box through a coupled face
+     is deleted and its mass, momentum and energy (Eqs. 49-51) repay it; the
+     reservoir's balance is settled into the Eulerian cell as far as that cell
+     can take it (:func:`_settle`); through a face on the domain boundary a
+     particle leaves the run (``boundary_out``).
 
 Mass budget, exact up to round-off: Eulerian-only cells + particles +
 reservoirs + boundary_out = constant from activation on.
@@ -324,8 +326,10 @@ def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, V):
 
 
 def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Static, layout: Layout):
-    """The scheme's transfers through the coupled faces (module docstring): inflow into the reservoirs, the
-    convective part of outflow taken back from the Eulerian cell (the deleted particles replace it)."""
+    """The scheme's transfers through the coupled faces (module docstring): inflow into the reservoirs;
+    through an outflow face the Eulerian cell keeps the scheme's transfer and its convective part is booked
+    as a debt of the face's reservoir, which the deleted particles repay (:func:`remove_leaving`); then
+    :func:`_settle` hands the outflow reservoirs' balance to the Eulerian cells."""
     cfg = static.euler
     n, d = cfg.n_materials, len(cfg.shape)
     lay = row_layout(cfg)
@@ -342,16 +346,53 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     # (a material absent from the donor has no phase density: its zero transfer must not carry 0 x NaN)
     pressure = jnp.concatenate([jnp.sum(tf[lay.mom:lay.mom + d] - carried_mom, axis=1),
                                 jnp.sum(tf[lay.energy] - jnp.sum(carried_e, axis=0))[None]])
-    m_in = jnp.where(inflow, m_k, 0.0)
     u3 = jnp.zeros((3,) + u.shape[1:], u.dtype).at[:d].set(u)
-    res = res._replace(mass=res.mass + m_in.T,
-                       momentum=res.momentum + (m_in[:, None, :] * u3[None]).transpose(2, 0, 1),
-                       energy=res.energy + jnp.where(inflow, carried_e, 0.0).T)
-    out = ~inflow  # m_k <= 0: the Eulerian cell received -m_k; take the convective part back
-    vol_k = jnp.stack([jnp.where(out & (m_k[k] != 0.0), m_k[k] / rho_k[k], 0.0) for k in range(n)])
-    U = _add_to_cells(U, layout.face_out, jnp.where(out, m_k, 0.0), jnp.where(out, carried_mom, 0.0),
-                      jnp.where(out, jnp.sum(carried_e, axis=0), 0.0), vol_k, lay, V)
+    res = res._replace(mass=res.mass + m_k.T, momentum=res.momentum + (m_k[:, None, :] * u3[None]).transpose(2, 0, 1),
+                       energy=res.energy + carried_e.T)
+    U, res = _settle(U, res, ~inflow, trusted_phases(prim_flat, layout.face_in, eos, n)[0], lay, layout, V)
     return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
+
+
+SETTLE_FRACTIONS = (1.0, 0.5, 0.25, 0.125)  # shares of an outflow reservoir's balance tried, largest first
+
+
+def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout, V):
+    """Move the balance of the outflow faces' reservoirs (debt of the scheme's convective transfer plus the
+    deleted particles' content) into the Eulerian cells outside those faces.
+
+    Particles cross a face one at a time, each carrying ~1/ppc^ndim of a bridge cell's mass, while the scheme
+    transfers a little every step: settling each step's debt at once (before the particle that repays it has
+    crossed) can take more than the cell holds when a shock leaves the box (a shock of 500:1 into the
+    Eulerian region emptied the first cell past the face). So a cell takes the largest share in
+    SETTLE_FRACTIONS that leaves it at least half of its density and of its internal energy density; the rest
+    waits in the reservoir for the next particles. Mass, momentum and energy move together (budget exact)."""
+    flat = U.reshape(U.shape[0], -1)
+    n, d = lay.n, lay.ndim
+    cells = layout.face_out
+    mass = jnp.sum(res.mass, axis=1)  # (F,)
+    mom = jnp.sum(res.momentum, axis=1)[:, :d]  # (F, d)
+    energy = jnp.sum(res.energy, axis=1)
+    rho0 = sum(flat[k][cells] for k in range(n))
+    mom0 = jnp.stack([flat[lay.mom + i][cells] for i in range(d)], axis=1)
+    e0 = flat[lay.energy][cells]
+
+    def internal(rho, m, E):
+        return E - 0.5 * jnp.sum(m * m, axis=1) / jnp.where(rho > 0.0, rho, 1.0)
+
+    i0 = internal(rho0, mom0, e0)
+    share = jnp.zeros_like(mass)
+    for f in SETTLE_FRACTIONS[::-1]:  # the largest acceptable share wins
+        rho = rho0 + f * mass / V
+        ok = (rho >= 0.5 * rho0) & (internal(rho, mom0 + f * mom / V, e0 + f * energy / V) >= 0.5 * i0)
+        share = jnp.where(ok, f, share)
+    share = jnp.where(outflow, share, 0.0)
+    moved_m = share[:, None] * res.mass  # (F, n)
+    moved_p = share[:, None, None] * res.momentum
+    moved_e = share[:, None] * res.energy
+    vol_k = jnp.stack([jnp.where(moved_m[:, k] != 0.0, moved_m[:, k] / rho_k[k], 0.0) for k in range(n)])
+    U = _add_to_cells(U, cells, moved_m.T, jnp.sum(moved_p, axis=1)[:, :d].T, jnp.sum(moved_e, axis=1), vol_k,
+                      lay, V)
+    return U, res._replace(mass=res.mass - moved_m, momentum=res.momentum - moved_p, energy=res.energy - moved_e)
 
 
 def boundary_outflow(T, static: Static, layout: Layout):
@@ -376,15 +417,13 @@ def particle_content(P: mpm.Particles):
     return P.mass, P.mass[:, None] * P.v, P.mass * (P.point.energy + ke)
 
 
-def remove_leaving(U, state: mpm.State, budget: Budget, static: Static, layout: Layout):
+def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: Static, layout: Layout):
     """Delete the gas particles outside the box: through a coupled face their mass, momentum and energy go
-    to the Eulerian cell they moved into (000 Eqs. 49-51); through a face on the domain boundary they
-    leave the run (``boundary_out``)."""
+    to the reservoir of the face cell they crossed (000 Eqs. 49-51; :func:`receive` settles it into the
+    Eulerian cell); through a face on the domain boundary they leave the run (``boundary_out``)."""
     P = state.particles
-    cfg = static.euler
     d = static.mpm.grid.dim
     n = len(static.gas_material)
-    lay = row_layout(cfg)
     slot = _gas_index(static, P.material)
     gas = P.active & (slot >= 0)
     x = P.x[:, :d]
@@ -406,18 +445,16 @@ def remove_leaving(U, state: mpm.State, budget: Budget, static: Static, layout: 
         first += size
     mass, mom, energy = particle_content(P)
     to_euler = out_any & (face >= 0)
-    if static.faces:
-        cells = layout.face_out[jnp.clip(face, 0, first - 1)]
-        into = [jnp.where(to_euler & (slot == k), mass, 0.0) for k in range(n)]
-        vol = [jnp.where(to_euler & (slot == k), mass / P.point.density, 0.0) for k in range(n)]
-        U = _add_to_cells(U, cells, jnp.stack(into), jnp.where(to_euler[None], mom.T[:d], 0.0),
-                          jnp.where(to_euler, energy, 0.0), jnp.stack(vol), lay, cell_measure(cfg))
+    at = (jnp.where(to_euler, face, first), jnp.clip(slot, 0, n - 1))  # (index ``first`` is dropped)
+    res = res._replace(mass=res.mass.at[at].add(mass, mode="drop"),
+                       momentum=res.momentum.at[at].add(mom, mode="drop"),
+                       energy=res.energy.at[at].add(energy, mode="drop"))
     gone = out_any & ~to_euler
     left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(gone & (slot == j), mass, 0.0)) for j in range(n)]),
                             jnp.sum(jnp.where(gone[:, None], mom, 0.0), axis=0)[:d],
                             jnp.sum(jnp.where(gone, energy, 0.0))[None]])
     P = P._replace(active=P.active & ~out_any)
-    return U, state._replace(particles=P), budget._replace(boundary_out=budget.boundary_out + left)
+    return state._replace(particles=P), res, budget._replace(boundary_out=budget.boundary_out + left)
 
 
 def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, params: mpm.Params, static: Static,

@@ -139,7 +139,7 @@ class Cfdmp:
         grid = setup.grid
         kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype))
         mp = mpm.make_params(setup.model_params, cfl=info["cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
-                             dtype=dtype)
+                             pic_fraction=info["pic_fraction"], dtype=dtype)
         shape = mpm.SHAPES[info["shape_functions"]]
         half = np.zeros((setup.ring_cells.size, 3))
         half[:, :nd] = 0.5 * grid.cell_size
@@ -244,18 +244,18 @@ class Cfdmp:
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
             ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.outflow_ghost(s.mpm.particles, lay, cs))
-            U, ms, budget = cp.remove_leaving(s.U, ms, s.budget, cs, lay)
+            ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
-            return s._replace(U=U, mpm=ms, budget=budget), cp.view(U, rows, gas_volume, lay)
+            return s._replace(mpm=ms, reservoirs=res, budget=budget), cp.view(s.U, rows, gas_volume, lay)
 
         def coupled(s, dt):
             eos = params.euler.eos
             prim = cp.flat_primitives(s.U, eos, cfg)
             ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs, s.mpm.particles))
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
-            U, res, budget = cp.receive(U, s.reservoirs, s.budget, T, prim, eos, cs, lay)
+            ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
+            U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
-            U, ms, budget = cp.remove_leaving(U, ms, budget, cs, lay)
             ms, res, budget = cp.feed(ms, res, budget, cp.flat_primitives(U, eos, cfg), eos, params.mpm, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
             U = cp.fictitious(U, rows, gas_volume, lay)

@@ -13,7 +13,13 @@ One step of length dt (all particle loops are whole-array operations):
 3. G2P: particle velocity by the nodal velocity increment (Eq. 24, FLIP) and
    position by the UPDATED nodal velocity p^{n+1}/m (ERRATA 000-5, standard
    MUSL; the seed's Eq. 25 prints p^n). Prescribed particles move with their
-   own velocity.
+   own velocity. Optionally a fraction alpha of each material's particles'
+   velocity is PIC, the interpolated updated nodal velocity (the FLIP/PIC blend
+   of Brackbill & Ruppel, JCP 65 (1986) 314; Stomakhin et al., ACM TOG 32 (2013)
+   102): v_p = (1 - alpha) v_FLIP + alpha v_PIC damps the particle-velocity
+   modes the grid cannot see (FLIP's ringing in a gas); alpha = 0 is pure FLIP.
+   The kinetic energy the blend removes, (|v_FLIP|^2 - |v_p|^2) / 2 per unit
+   mass, heats the particle (its total energy is unchanged by the blend).
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
    momentum; face conditions and constraints again.
 5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28);
@@ -85,6 +91,7 @@ class Params(NamedTuple):
     q_quadratic: jnp.ndarray  # C_q of the bulk viscosity, >= 0
     q_linear: jnp.ndarray  # C_l of the bulk viscosity, >= 0
     gravity: jnp.ndarray  # (3,) body force per unit mass [m/s^2]
+    pic_fraction: jnp.ndarray  # (n_models,) PIC share alpha of each material's G2P velocity, 0 <= alpha <= 1
 
 
 class State(NamedTuple):
@@ -125,8 +132,12 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
 
 
 def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=DEFAULT_LINEAR,
-                gravity=(0.0, 0.0, 0.0), dtype=jnp.float64) -> Params:
-    """Checked :class:`Params`; ``materials`` the model params in material order."""
+                gravity=(0.0, 0.0, 0.0), pic_fraction=0.0, dtype=jnp.float64) -> Params:
+    """Checked :class:`Params`; ``materials`` the model params in material order; ``pic_fraction`` one
+    value for all materials or one per material."""
+    pic = np.broadcast_to(np.asarray(pic_fraction, float), (len(materials),))
+    if not np.all((pic >= 0.0) & (pic <= 1.0)):
+        raise MPMError(f"numerics.pic_fraction: expected 0 <= alpha <= 1, got {pic_fraction!r}")
     if not 0.0 < cfl <= 1.0:
         raise MPMError(f"numerics.cfl: expected 0 < cfl <= 1, got {cfl!r}")
     for key, value in (("q_quadratic", q_quadratic), ("q_linear", q_linear)):
@@ -137,7 +148,8 @@ def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=D
     if len(gravity) > 3 or not np.all(np.isfinite(g)):
         raise MPMError(f"gravity: expected up to 3 finite components, got {gravity!r}")
     return Params(materials=tuple(materials), cfl=jnp.asarray(cfl, dtype), q_quadratic=jnp.asarray(q_quadratic, dtype),
-                  q_linear=jnp.asarray(q_linear, dtype), gravity=jnp.asarray(g, dtype))
+                  q_linear=jnp.asarray(q_linear, dtype), gravity=jnp.asarray(g, dtype),
+                  pic_fraction=jnp.asarray(pic, dtype))
 
 
 def _component(stress, i, j):
@@ -330,7 +342,10 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     v_new = _constrain((p_I + dt * f_I) * inv_m, p_fix, m_fix, grid, config.prescribed)  # Eq. (22)
     # G2P: Eq. (24), and Eq. (25) with the updated nodal velocity (ERRATA 000-5)
     moved = grid_to_particle(idx, w, jnp.concatenate([v_new - v_old, v_new], axis=1), combined)
-    v_p = jnp.where(act[:, None], P.v + _pad3(moved[:d]), P.v)
+    v_flip = P.v + _pad3(moved[:d])
+    alpha = params.pic_fraction[jnp.clip(P.material, 0, len(config.models) - 1)][:, None]
+    v_p = jnp.where(act[:, None], v_flip + alpha * (_pad3(moved[d:]) - v_flip), P.v)
+    blend_heat = 0.5 * (jnp.sum(v_flip * v_flip, axis=1) - jnp.sum(v_p * v_p, axis=1))  # 0 where alpha = 0
     x_p = jnp.where(act[:, None], P.x + dt * _pad3(moved[d:]), P.x)
     if config.prescribed:
         v_p = jnp.where(P.prescribed[:, None], P.prescribed_velocity, v_p)
@@ -351,7 +366,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     dspin = _tensor(skew) if skew else jnp.zeros_like(dstrain)
     ps = P.point
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
-    energy = ps.energy - P.q * dvol / ps.density  # q work, -q dV per unit mass (Eq. 13 with p + q)
+    # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the particle
+    energy = ps.energy - P.q * dvol / ps.density + jnp.where(act, blend_heat, 0.0)
     new = _material_update(ps._replace(density=rho, energy=energy), dstrain, dspin, dt, P.material, params, config)
     c = wave_speed(new, P.material, params, config, pool=True)
     rate = dvol / dt

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from blastfsi import mpm
+from blastfsi.cfdmp import coupling as cp_kernels
 from blastfsi.cfdmp.scenario import FICTITIOUS_DEPTH, CfdmpScenario
 from blastfsi.constitutive import get as get_model
 from blastfsi.euler.scenario import AXES, EulerScenario
@@ -34,7 +35,8 @@ from blastfsi.problems import euler as euler_problem
 from blastfsi.problems import mpm as mpm_problem
 from blastfsi.scenario import ScenarioError
 
-CAPACITY_FACTOR = 3  # default pool: structures + 3 x the box's gas particles (compression by the blast)
+CAPACITY_FACTOR = 3  # default pool: structures + 3 x the box's gas particles (compression by the blast), with
+#                     coupled faces (the bridge creates particles)
 
 
 @dataclass(frozen=True)
@@ -218,11 +220,6 @@ def build(sc: CfdmpScenario) -> Setup:
     gcell = np.ravel_multi_index(tuple(np.clip(np.floor((gx[:, ax] - g.lower[ax]) / dx).astype(int), 0,
                                                shape[ax] - 1) for ax in range(nd)), shape)
     n_struct = 0 if structures is None else int(np.asarray(structures.mass).size)
-    capacity = sc.numerics.capacity or n_struct + CAPACITY_FACTOR * gvol.size
-    if capacity < n_struct + gvol.size:
-        raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
-                            f"of the MPM box ({gvol.size}) need {n_struct + gvol.size} particles; set "
-                            f"numerics.capacity >= {n_struct + gvol.size} (the bridge creates more as gas flows in)")
 
     # coupled faces and their face cells
     faces = []
@@ -250,6 +247,17 @@ def build(sc: CfdmpScenario) -> Setup:
             out_i, in_i = (plane - 1, plane) if side == 0 else (plane, plane - 1)
             faces.append(Face(ax, side, plane, tuple(x - lo[a] for a, x in zip(others, lat)), flat(out_i),
                               flat(in_i), centre))
+
+    # MPM everywhere (no coupled face) never creates particles: the pool is what activation makes at the start,
+    # one particle per lattice point and material present there (coupling.activate)
+    partial = esetup.alpha * esetup.rho_k  # (n, *shape)
+    present = partial >= cp_kernels.PRESENT * np.sum(partial, axis=0)
+    at_start = int(np.sum(present.reshape(len(partial), -1)[:, gcell]))
+    capacity = sc.numerics.capacity or n_struct + (CAPACITY_FACTOR * gvol.size if faces else at_start)
+    if capacity < n_struct + at_start:
+        raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
+                            f"of the MPM box ({at_start}) need {n_struct + at_start} particles; set "
+                            f"numerics.capacity >= {n_struct + at_start} (the bridge creates more as gas flows in)")
 
     # ring cells: MPM-grid cells outside the box
     ring = np.ones(shape, bool)
@@ -294,7 +302,8 @@ def build(sc: CfdmpScenario) -> Setup:
                 structure_particles=n_struct, gas_particles=int(gvol.size), capacity=int(capacity),
                 mpm_materials=list(names), activation_overpressure=box.activation_overpressure,
                 gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape,
-                q=[sc.numerics.q_quadratic, sc.numerics.q_linear])
+                q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
+                pic_fraction=[sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))])
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
                  int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, gx, gvol, ghalf, gcell,
                  tuple(boundary_faces), outflow_area, info)
