@@ -1,6 +1,6 @@
 """Seed 000 Sec. 5.2 (explosion next to a concrete slab) through CFDMP: Figs. 10-12 and the slab's damage.
 
-    python docs/figures/make_000_figures.py run DIR        # the runs below into DIR (hours on a 2-core CPU)
+    python docs/figures/make_000_figures.py run DIR        # the runs below into DIR (~10 min on a 2-core CPU)
     python docs/figures/make_000_figures.py figures DIR    # PNG + he_slab_2d.json here, from DIR
 
 Runs (all through ``blastfsi.run``, the shipped examples with the overrides named):
@@ -14,8 +14,7 @@ Runs (all through ``blastfsi.run``, the shipped examples with the overrides name
     python docs/figures/make_000_figures.py field-at DIR RUN TIME OUT   # RUN's fields at TIME from a checkpoint
     python docs/figures/make_000_figures.py step-cost DIR              # s per step of both Fig. 12 set-ups
 
-No run has reached its end yet (docs/cfdmp.md, he-slab-2d status): the numbers there come from the
-checkpoints of ``w5``, not from this script's JSON.
+The numbers of docs/cfdmp.md (he-slab-2d status) come from these runs and from he_slab_2d.json.
 """
 from __future__ import annotations
 
