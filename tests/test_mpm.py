@@ -446,3 +446,17 @@ def test_pic_share_damps_the_mode_the_grid_cannot_see_and_heats(alpha):
     momentum = [float(jnp.sum(jnp.where(p.active, p.mass * p.v[:, 0], 0.0))) for p in (old, new)]
     scale = float(jnp.sum(jnp.where(old.active, old.mass, 0.0))) * delta
     assert abs(momentum[1] - momentum[0]) < 1e-13 * scale
+
+
+def test_added_particles_skip_the_reserved_slots():
+    """``first_slot``: a coupled run keeps its structures in the first slots; a freed structure slot (a
+    fragment that left the box) must not take a gas particle, which its model would never update."""
+    x, vol, half = mpm.lattice(GRID2, (0.2, 0.2), (0.4, 0.4), 2)  # 16 particles
+    pool = mpm.make_pool(mpm.new_particles(x, vol, RHO, half_size=half), 24)
+    pool = pool._replace(active=pool.active.at[:4].set(False))  # 4 freed slots before first_slot
+    batch = mpm.new_particles(x[:6], vol[:6], RHO, half_size=half[:6])
+    new, required, slots = mpm.add_particles_at(pool, batch, 8)
+    assert np.all(np.asarray(slots) >= 16) and not np.any(np.asarray(new.active[:4]))
+    assert int(required) == 12 + 4 + 6  # active + reserved free + batch
+    _, required, slots = mpm.add_particles_at(pool, mpm.concatenate(batch, batch), 8)
+    assert int(required) == 28 and np.all(np.asarray(slots) == 24)  # does not fit: nothing added

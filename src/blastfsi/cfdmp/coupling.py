@@ -120,6 +120,8 @@ class Budget(NamedTuple):
     pressure_transfer: jnp.ndarray  # (ndim + 1,) momentum and energy of the scheme's face transfer not carried
     #                                 by the reservoirs (the interface pressure's impulse and work)
     required: jnp.ndarray  # () int32: active particles an emission needed (> capacity: the run stops)
+    structure_out: jnp.ndarray  # () mass of structure particles that left the box (their momentum and energy
+    #                             are in boundary_out; structure mass is not part of the gas budget's rows)
 
 
 def cell_measure(cfg: ek.Config) -> float:
@@ -418,17 +420,21 @@ def particle_content(P: mpm.Particles):
 
 
 def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: Static, layout: Layout):
-    """Delete the gas particles outside the box: through a coupled face their mass, momentum and energy go
-    to the reservoir of the face cell they crossed (000 Eqs. 49-51; :func:`receive` settles it into the
-    Eulerian cell); through a face on the domain boundary they leave the run (``boundary_out``)."""
+    """Delete the particles outside the box. Gas: through a coupled face its mass, momentum and energy go
+    to the reservoir of the face cell it crossed (000 Eqs. 49-51; :func:`receive` settles it into the
+    Eulerian cell); through a face on the domain boundary it leaves the run (``boundary_out``). Structure
+    fragments leave the run through any face (the grid holds no solid outside the box): their momentum and
+    energy are booked in ``boundary_out``, their mass in ``structure_out``."""
     P = state.particles
     d = static.mpm.grid.dim
     n = len(static.gas_material)
     slot = _gas_index(static, P.material)
-    gas = P.active & (slot >= 0)
     x = P.x[:, :d]
     lo, hi = layout.box_lower[:d], layout.box_upper[:d]
-    out_any = gas & jnp.any((x < lo) | (x > hi), axis=1)
+    outside = P.active & jnp.any((x < lo) | (x > hi), axis=1)
+    gas = P.active & (slot >= 0)
+    out_any = gas & outside
+    fragment = outside & (slot < 0)
     face = jnp.full(P.mass.shape, -1, jnp.int32)
     first = 0
     h = static.mpm.grid.cell_size
@@ -449,12 +455,14 @@ def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: St
     res = res._replace(mass=res.mass.at[at].add(mass, mode="drop"),
                        momentum=res.momentum.at[at].add(mom, mode="drop"),
                        energy=res.energy.at[at].add(energy, mode="drop"))
-    gone = out_any & ~to_euler
+    gone = (out_any & ~to_euler) | fragment
     left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(gone & (slot == j), mass, 0.0)) for j in range(n)]),
                             jnp.sum(jnp.where(gone[:, None], mom, 0.0), axis=0)[:d],
                             jnp.sum(jnp.where(gone, energy, 0.0))[None]])
-    P = P._replace(active=P.active & ~out_any)
-    return state._replace(particles=P), res, budget._replace(boundary_out=budget.boundary_out + left)
+    P = P._replace(active=P.active & ~outside)
+    return state._replace(particles=P), res, budget._replace(
+        boundary_out=budget.boundary_out + left, structure_out=budget.structure_out + jnp.sum(jnp.where(
+            fragment, mass, 0.0)))
 
 
 def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, params: mpm.Params, static: Static,
@@ -516,7 +524,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
                           wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(zero.shape, bool),
                           prescribed_velocity=jnp.zeros_like(flat(x)), surface_load=jnp.zeros_like(flat(x)))
     batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
-    pool, required, slots = mpm.add_particles_at(P, batch)
+    pool, required, slots = mpm.add_particles_at(P, batch, static.n_structure)
     fits = required <= cap
     # grow the existing inflow particles in place
     grow = flat(fed & has) & fits
@@ -570,5 +578,5 @@ def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: St
                           vol_rate=zero, wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(n * G, bool),
                           prescribed_velocity=jnp.zeros_like(half), surface_load=jnp.zeros_like(half))
     batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
-    pool, required = mpm.add_particles(state.particles, batch)
+    pool, required = mpm.add_particles(state.particles, batch, static.n_structure)
     return state._replace(particles=pool), required

@@ -208,7 +208,8 @@ class Cfdmp:
         F = sum(cs.face_sizes)
         res = cp.Reservoirs(jnp.zeros((F, n), dtype), jnp.zeros((F, n, 3), dtype), jnp.zeros((F, n), dtype),
                             jnp.full((F, n), -1, jnp.int32))
-        budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32))
+        budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32),
+                           jnp.zeros((), dtype))
         zeros = jnp.zeros(n + d + 1, dtype)
         maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
@@ -285,8 +286,10 @@ class Cfdmp:
             row += list(total[n:n + d])
             nst = cs.n_structure
             if nst:
-                disp = jnp.linalg.norm(P.x[:nst] - params.structure_x0, axis=1)
-                row += [jnp.max(disp), jnp.max(P.point.damage[:nst]), jnp.max(P.point.plastic_strain[:nst])]
+                on = P.active[:nst]  # (fragments that left the box no longer count)
+                disp = jnp.where(on, jnp.linalg.norm(P.x[:nst] - params.structure_x0, axis=1), 0.0)
+                row += [jnp.max(disp), jnp.max(jnp.where(on, P.point.damage[:nst], 0.0)),
+                        jnp.max(jnp.where(on, P.point.plastic_strain[:nst], 0.0))]
             flat = [prim["pressure"][gauges] - params.reference_pressure, prim["rho"][gauges]]
             flat += [prim["velocity"][k][gauges] for k in range(d)]
             return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])
@@ -419,16 +422,19 @@ class Cfdmp:
         if setup.info["structure_particles"]:
             P = state.mpm.particles
             nst = setup.info["structure_particles"]
-            dmg = np.asarray(P.point.damage)[:nst]
-            vol = np.asarray(P.mass)[:nst] / np.asarray(P.point.density)[:nst]
-            x = np.asarray(P.x)[:nst, :nd]
+            on = np.asarray(P.active)[:nst]  # fragments that left the box are gone (mass_left_the_box)
+            dmg = np.asarray(P.point.damage)[:nst][on]
+            vol = np.asarray(P.mass)[:nst][on] / np.asarray(P.point.density)[:nst][on]
+            x = np.asarray(P.x)[:nst, :nd][on]
             damaged = dmg >= 0.5
             out["structures"] = {
                 "max_displacement": float(hist["structure_max_displacement"][-1]),
-                "max_damage": float(dmg.max()), "max_plastic_strain": float(hist["structure_max_plastic_strain"][-1]),
-                "damaged_volume": float(vol[damaged].sum()), "damaged_fraction": float(vol[damaged].sum() / vol.sum()),
+                "max_damage": float(dmg.max(initial=0.0)), "max_plastic_strain": float(hist["structure_max_plastic_strain"][-1]),
+                "damaged_volume": float(vol[damaged].sum()),
+                "damaged_fraction": float(vol[damaged].sum() / vol.sum()) if on.any() else None,
                 "damaged_extent": ([[float(v) for v in x[damaged].min(axis=0)], [float(v) for v in x[damaged].max(axis=0)]]
-                                   if damaged.any() else None)}
+                                   if damaged.any() else None),
+                "mass_left_the_box": float(state.budget.structure_out)}
         return out
 
     def plots(self, folder: Path, sc: CfdmpScenario, setups: list, histories: list[dict], members: list[dict],

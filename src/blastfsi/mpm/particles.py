@@ -188,25 +188,27 @@ def _select(mask, a, b):
     return jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b)
 
 
-def add_particles(pool: Particles, batch: Particles):
+def add_particles(pool: Particles, batch: Particles, first_slot: int = 0):
     """:func:`add_particles_at` without the slots."""
-    pool, required, _ = add_particles_at(pool, batch)
+    pool, required, _ = add_particles_at(pool, batch, first_slot)
     return pool, required
 
 
-def add_particles_at(pool: Particles, batch: Particles):
-    """Fill free slots of ``pool`` with the active particles of ``batch`` (jittable).
+def add_particles_at(pool: Particles, batch: Particles, first_slot: int = 0):
+    """Fill free slots of ``pool`` from ``first_slot`` on with the active particles of ``batch`` (jittable;
+    a coupled run keeps its structures in the slots before ``first_slot``, freed or not).
 
     The k-th active particle of the batch goes to the k-th free slot (ranks by
     cumulative sums, no sort). Returns ``(pool, required, slots)``: ``required`` is
-    the number of active particles after the add. When it exceeds the
-    capacity nothing is added (the pool comes back unchanged) so the caller
+    the number of active particles after the add plus the slots before ``first_slot`` that are free.
+    When it exceeds the capacity nothing is added (the pool comes back unchanged) so the caller
     can stop and report it. Also returns the slot of every batch entry
     (``capacity`` for inactive entries and when nothing was added).
     """
     capacity, batch_size = pool.mass.shape[0], batch.mass.shape[0]
-    free = ~pool.active
-    required = jnp.sum(pool.active) + jnp.sum(batch.active)
+    usable = jnp.arange(capacity) >= first_slot
+    free = ~pool.active & usable
+    required = jnp.sum(pool.active | ~usable) + jnp.sum(batch.active)
     free_rank = jnp.cumsum(free) - 1
     slot_of_rank = jnp.full(batch_size, capacity).at[jnp.where(free, free_rank, batch_size)].set(
         jnp.arange(capacity), mode="drop")
