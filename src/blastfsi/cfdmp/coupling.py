@@ -351,7 +351,7 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     u3 = jnp.zeros((3,) + u.shape[1:], u.dtype).at[:d].set(u)
     res = res._replace(mass=res.mass + m_k.T, momentum=res.momentum + (m_k[:, None, :] * u3[None]).transpose(2, 0, 1),
                        energy=res.energy + carried_e.T)
-    U, res = _settle(U, res, ~inflow, trusted_phases(prim_flat, layout.face_in, eos, n)[0], lay, layout, V)
+    U, res = _settle(U, res, ~inflow, rho_k, lay, layout, V)  # (outflow faces: the donor is the bridge cell)
     return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
 
 
@@ -360,7 +360,8 @@ SETTLE_FRACTIONS = (1.0, 0.5, 0.25, 0.125)  # shares of an outflow reservoir's b
 
 def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout, V):
     """Move the balance of the outflow faces' reservoirs (debt of the scheme's convective transfer plus the
-    deleted particles' content) into the Eulerian cells outside those faces.
+    deleted particles' content) into the Eulerian cells outside those faces; ``rho_k`` the phase densities of
+    the donor (bridge) cells, for the volume the settled products take.
 
     Particles cross a face one at a time, each carrying ~1/ppc^ndim of a bridge cell's mass, while the scheme
     transfers a little every step: settling each step's debt at once (before the particle that repays it has
