@@ -54,14 +54,14 @@ def elastic_params(youngs=E, nu=NU):
 
 
 def setup(grid, lower, upper, *, shape="linear", v=None, ppc=2, capacity=CAPACITY, q=(0.0, 0.0),
-          gravity=(0.0,) * 3, cfl=0.5, youngs=E, nu=NU, prescribed=False):
+          gravity=(0.0,) * 3, cfl=0.5, youngs=E, nu=NU, prescribed=False, blend=False):
     """A body filling [lower, upper] with velocity field v(x) -> (n, 3), in a pool of ``capacity``
     (one capacity for all tests, so tests on the same grid share one compiled step)."""
     x, vol, half = mpm.lattice(grid, lower, upper, ppc)
     vel = np.zeros_like(x) if v is None else v(x)
     batch = mpm.new_particles(x, vol, RHO, v=vel, half_size=half)
     pool = mpm.make_pool(batch, capacity)
-    cfg = mpm.make_config(grid, (ELASTIC,), shape=shape, prescribed=prescribed)
+    cfg = mpm.make_config(grid, (ELASTIC,), shape=shape, prescribed=prescribed, blend=blend)
     prm = mpm.make_params((elastic_params(youngs, nu),), cfl=cfl, q_quadratic=q[0], q_linear=q[1], gravity=gravity)
     return initialize(pool, prm, cfg), prm, cfg
 
@@ -421,31 +421,56 @@ def test_model_slots_give_the_same_step():
 
 
 @pytest.mark.parametrize("alpha", [0.0, 0.25, 1.0])
-def test_pic_share_damps_the_mode_the_grid_cannot_see_and_heats(alpha):
+@pytest.mark.parametrize("stream", [0.0, 50.0])
+def test_pic_share_damps_the_mode_the_grid_cannot_see_and_heats(alpha, stream):
     """FLIP/PIC blend (musl docstring, step 3): a checkerboard velocity +-delta of the two particles of every
-    cell (1D, linear shape functions) gives every interior node zero momentum, so the grid cannot see it.
-    FLIP (alpha = 0) keeps it; a PIC share alpha scales it by (1 - alpha) in one step and the kinetic energy
-    taken, (1 - (1 - alpha)^2) delta^2 / 2 per unit mass, heats the particle; momentum is unchanged."""
+    cell (1D, linear shape functions), on a uniform stream U, gives every interior node the velocity U, so the
+    grid cannot see the checkerboard. FLIP (alpha = 0) keeps it; a PIC share alpha scales it by (1 - alpha) in
+    one step. The kinetic energy taken, (1 - (1 - alpha)^2) delta^2 / 2 per unit mass in the frame moving with
+    the stream, heats every interior particle by that amount whatever U (Galilean invariance; the kinetic
+    energy each particle loses is that +- alpha U delta, which, booked as its heat, cooled every other
+    particle). Momentum is unchanged and, with a vanishing modulus (no strain energy), the total energy
+    sum_p m_p (e_p + |v_p|^2 / 2) too, to round-off."""
     delta = 2.0
+    U = stream * delta
 
     def checkerboard(x):
         v = np.zeros_like(x)
-        v[:, 0] = delta * np.where(np.floor(x[:, 0] / 0.025).astype(int) % 2 == 0, 1.0, -1.0)
+        v[:, 0] = U + delta * np.where(np.floor(x[:, 0] / 0.025).astype(int) % 2 == 0, 1.0, -1.0)
         return v
 
-    state, prm, cfg = setup(GRID1, (0.5,), (1.5,), v=checkerboard)
+    state, prm, cfg = setup(GRID1, (0.5,), (1.5,), v=checkerboard, youngs=1e-9, blend=True)
     prm = prm._replace(pic_fraction=jnp.full((1,), alpha))
     new = mpm.step(state, 1e-6, prm, cfg).particles
     old = state.particles
     x = np.asarray(old.x[:, 0])
     interior = np.asarray(old.active) & (x > 0.6) & (x < 1.4)  # nodes with a full support, a cell from the ends
     v0, v1 = np.asarray(old.v[:, 0]), np.asarray(new.v[:, 0])
-    assert np.allclose(v1[interior], (1.0 - alpha) * v0[interior], rtol=0.0, atol=1e-12 * delta)
+    assert np.allclose(v1[interior] - U, (1.0 - alpha) * (v0[interior] - U), rtol=0.0, atol=1e-12 * (delta + U))
     heat = np.asarray(new.point.energy - old.point.energy)[interior]
-    assert np.allclose(heat, 0.5 * (1.0 - (1.0 - alpha) ** 2) * delta ** 2, rtol=1e-12, atol=1e-12 * delta ** 2)
-    momentum = [float(jnp.sum(jnp.where(p.active, p.mass * p.v[:, 0], 0.0))) for p in (old, new)]
-    scale = float(jnp.sum(jnp.where(old.active, old.mass, 0.0))) * delta
-    assert abs(momentum[1] - momentum[0]) < 1e-13 * scale
+    # round-off: the heat is a difference of terms ~ alpha U^2
+    assert np.allclose(heat, 0.5 * (1.0 - (1.0 - alpha) ** 2) * delta ** 2, rtol=0.0,
+                       atol=1e-12 * (delta + U) ** 2)
+    m = np.where(np.asarray(old.active), np.asarray(old.mass), 0.0)
+    momentum = [float(np.sum(m * np.asarray(p.v[:, 0]))) for p in (old, new)]
+    assert abs(momentum[1] - momentum[0]) < 1e-13 * float(np.sum(m)) * (delta + U)
+    energy = [float(np.sum(m * (np.asarray(p.point.energy) + 0.5 * np.asarray(p.v[:, 0]) ** 2))) for p in (old, new)]
+    assert abs(energy[1] - energy[0]) < 1e-12 * float(np.sum(m)) * (delta + U) ** 2
+
+
+def test_pic_share_needs_the_blend_config():
+    """Without ``Config.blend`` the step is pure FLIP whatever Params.pic_fraction says (a static switch: runs
+    without a PIC share carry none of its channels)."""
+    def checkerboard(x):
+        v = np.zeros_like(x)
+        v[:, 0] = np.where(np.floor(x[:, 0] / 0.025).astype(int) % 2 == 0, 1.0, -1.0)
+        return v
+
+    state, prm, cfg = setup(GRID1, (0.5,), (1.5,), v=checkerboard)
+    new = mpm.step(state, 1e-6, prm._replace(pic_fraction=jnp.full((1,), 0.5)), cfg).particles
+    x = np.asarray(state.particles.x[:, 0])
+    interior = np.asarray(state.particles.active) & (x > 0.6) & (x < 1.4)
+    assert np.allclose(np.asarray(new.v[:, 0])[interior], np.asarray(state.particles.v[:, 0])[interior], atol=1e-12)
 
 
 def test_added_particles_skip_the_reserved_slots():

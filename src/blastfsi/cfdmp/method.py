@@ -122,7 +122,8 @@ class Cfdmp:
         # the structures fill the first slots of the pool and are never deleted; the gas lives after them
         slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)
                       for k in range(len(setup.models)))
-        mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots)
+        mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots,
+                               blend=any(a > 0.0 for a in setup.info["pic_fraction"]))
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
         sizes = tuple(int(f.outside.size) for f in setup.faces)
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))

@@ -18,8 +18,23 @@ One step of length dt (all particle loops are whole-array operations):
    of Brackbill & Ruppel, JCP 65 (1986) 314; Stomakhin et al., ACM TOG 32 (2013)
    102): v_p = (1 - alpha) v_FLIP + alpha v_PIC damps the particle-velocity
    modes the grid cannot see (FLIP's ringing in a gas); alpha = 0 is pure FLIP.
-   The kinetic energy the blend removes, (|v_FLIP|^2 - |v_p|^2) / 2 per unit
-   mass, heats the particle (its total energy is unchanged by the blend).
+   The blend takes kinetic energy h_p = (|v_FLIP|^2 - |v_p|^2) / 2 per unit
+   mass from the particle; that energy heats the blended particles, but not as
+   h_p itself. h_p has a part of first order in alpha, alpha (S n) . delta_p, where
+   delta_p = v_p^n - S g is the particle's deviation from the interpolated old
+   nodal velocity g and S n the PIC velocity. That part depends on the frame:
+   in a fast stream it cools every other particle by ~ alpha |v| |delta| and,
+   where the kinetic energy far exceeds the internal one (air around a slab's
+   edge), drove particles to negative internal energy and pressure. The heat
+   is instead
+       c_p = alpha (sum_I N_Ip n_I . u_I - S n . S g) + (alpha - alpha^2 / 2) |delta_p|^2,
+   with u_I the alpha-weighted nodal velocity of the blended particles. The
+   second term is the dissipation of the particle's own deviation. The first
+   is its share of the grid's, alpha n^T (M_lumped - M_consistent) g: the
+   weighted variance of the nodal velocities over its stencil, >= 0 and
+   frame-independent where u = g. sum_p m_p alpha_p ((S n) . v_p^n - sum_I
+   N_Ip n_I . u_I) = 0, so sum_p m_p c_p = sum_p m_p h_p exactly: the blend
+   conserves the energy (tests/test_mpm.py). Only when ``Config.blend``.
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
    momentum; face conditions and constraints again.
 5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28);
@@ -79,6 +94,7 @@ class Config:
     models: tuple  # Model per material index
     prescribed: bool  # some particles have a prescribed velocity (adds the constraint channels)
     combined_scatter: bool  # one row scatter/gather of all channels (GPU) or one per channel (CPU)
+    blend: bool = False  # some materials have a PIC share (Params.pic_fraction > 0; adds its channels)
     model_slots: tuple | None = None  # per model, the pool slots (start, stop) its particles can occupy
     #                                   (None: all): a model's update runs on those slots only
 
@@ -109,12 +125,13 @@ class NodalSource(NamedTuple):
 
 
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
-                combined_scatter: bool | None = None, model_slots=None) -> Config:
+                combined_scatter: bool | None = None, model_slots=None, blend: bool = False) -> Config:
     """Checked :class:`Config`; ``combined_scatter`` defaults to True except on
     the CPU backend (see :func:`particle_to_grid`); ``model_slots``: per model the
     pool slots (start, stop) its particles can occupy, or None for all (a coupled run keeps
     the structures in the first slots and the gas after them: each model then runs on its
-    own part of the pool only)."""
+    own part of the pool only); ``blend``: some material will have a PIC share (without it, Params.pic_fraction
+    is not read and the step is pure FLIP)."""
     if shape not in SHAPES:
         raise MPMError(f"numerics.shape: expected one of {tuple(SHAPES)}, got {shape!r}")
     models = tuple(models)
@@ -128,7 +145,7 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
             raise MPMError(f"model_slots: expected one (start, stop) with 0 <= start <= stop per model, "
                            f"got {model_slots!r}")
     return Config(grid=grid, shape=SHAPES[shape], models=models, prescribed=bool(prescribed),
-                  combined_scatter=bool(combined_scatter), model_slots=model_slots)
+                  combined_scatter=bool(combined_scatter), model_slots=model_slots, blend=bool(blend))
 
 
 def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=DEFAULT_LINEAR,
@@ -330,6 +347,11 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if config.prescribed:
         mwp = jnp.where(P.prescribed, mw, 0.0)
         channels += [mwp] + [mwp * P.prescribed_velocity[:, i] for i in range(d)]
+    if config.blend:  # the alpha-weighted nodal mass and momentum of the blend heat (step 3)
+        alpha = params.pic_fraction[jnp.clip(P.material, 0, len(config.models) - 1)]
+        alpha = jnp.where(act & ~P.prescribed, alpha, 0.0) if config.prescribed else jnp.where(act, alpha, 0.0)
+        amw = alpha * mw
+        channels += [amw] + [amw * P.v[:, i] for i in range(d)]
     nodal = particle_to_grid(idx, channels, n_nodes, combined)
     m_I, p_I, f_I = nodal[:, 0], nodal[:, 1:1 + d], nodal[:, 1 + d:1 + 2 * d]  # Eqs. (21), (18), (19)
     if source is not None:  # Eqs. (37)-(39)
@@ -341,12 +363,23 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     v_old = p_I * inv_m
     v_new = _constrain((p_I + dt * f_I) * inv_m, p_fix, m_fix, grid, config.prescribed)  # Eq. (22)
     # G2P: Eq. (24), and Eq. (25) with the updated nodal velocity (ERRATA 000-5)
-    moved = grid_to_particle(idx, w, jnp.concatenate([v_new - v_old, v_new], axis=1), combined)
+    table = [v_new - v_old, v_new]
+    if config.blend:
+        k = 1 + 2 * d + (1 + d if config.prescribed else 0)
+        m_a = nodal[:, k]
+        u_I = nodal[:, k + 1:k + 1 + d] / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]
+        table.append(jnp.sum(v_new * u_I, axis=1, keepdims=True))
+    moved = grid_to_particle(idx, w, jnp.concatenate(table, axis=1), combined)
     v_flip = P.v + _pad3(moved[:d])
-    alpha = params.pic_fraction[jnp.clip(P.material, 0, len(config.models) - 1)][:, None]
-    v_p = jnp.where(act[:, None], v_flip + alpha * (_pad3(moved[d:]) - v_flip), P.v)
-    blend_heat = 0.5 * (jnp.sum(v_flip * v_flip, axis=1) - jnp.sum(v_p * v_p, axis=1))  # 0 where alpha = 0
-    x_p = jnp.where(act[:, None], P.x + dt * _pad3(moved[d:]), P.x)
+    if config.blend:  # step 3: v_p = v_FLIP - alpha delta, and the heat c_p
+        delta = P.v - _pad3(moved[d:2 * d]) + _pad3(moved[:d])  # v_p^n - S g, S g = S n - S (n - g)
+        v_p = jnp.where(act[:, None], v_flip - alpha[:, None] * delta, P.v)
+        pic, old_grid = _pad3(moved[d:2 * d]), _pad3(moved[d:2 * d]) - _pad3(moved[:d])
+        blend_heat = alpha * (moved[2 * d] - jnp.sum(pic * old_grid, axis=1)) + (alpha - 0.5 * alpha ** 2) * jnp.sum(
+            delta * delta, axis=1)
+    else:
+        v_p, blend_heat = jnp.where(act[:, None], v_flip, P.v), 0.0
+    x_p = jnp.where(act[:, None], P.x + dt * _pad3(moved[d:2 * d]), P.x)
     if config.prescribed:
         v_p = jnp.where(P.prescribed[:, None], P.prescribed_velocity, v_p)
         x_p = jnp.where((P.prescribed & act)[:, None], P.x + dt * P.prescribed_velocity, x_p)
@@ -366,8 +399,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     dspin = _tensor(skew) if skew else jnp.zeros_like(dstrain)
     ps = P.point
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
-    # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the particle
-    energy = ps.energy - P.q * dvol / ps.density + jnp.where(act, blend_heat, 0.0)
+    # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the gas
+    energy = ps.energy - P.q * dvol / ps.density + blend_heat
     new = _material_update(ps._replace(density=rho, energy=energy), dstrain, dspin, dt, P.material, params, config)
     c = wave_speed(new, P.material, params, config, pool=True)
     rate = dvol / dt
