@@ -91,6 +91,54 @@ def test_strong_shock_leaves_the_mpm_region():
     assert np.all(f["density"] > 0.5 * R[0])
 
 
+def test_a_full_pool_grows_and_a_fixed_one_stops_the_run(shock):
+    """The default pool (structures + 1.25 x the box's gas particles) fills as the shock compresses the box's
+    gas and the bridge creates particles: the loop stops while the pool still has room for one step's
+    emissions, the driver enlarges it and the run goes on. No emission is refused, so the solution is the
+    one of a run with room to spare, to round-off (the extra slots add exact zeros to every sum; only the
+    order of the pool reductions changes), and the mass budget stays exact. With ``numerics.capacity`` set,
+    the same pool stops the run when an emission does not fit, with the size needed."""
+    from blastfsi import api, method as methods
+    from blastfsi.scenario import expand
+    from blastfsi.simulation import SimulationError
+
+    coupled, _ = shock
+    initial = methods.get("cfdmp").build(expand(api.load("cfdmp-shock-tube", set=FAST))[2][0]).capacity
+    assert np.nanmax(coupled.history["particles"]) > initial and coupled.summary["capacity"] > initial
+    assert coupled.summary["budget"]["max_mass_residual_relative"] < 1e-13
+    roomy = blastfsi.run("cfdmp-shock-tube", set={**FAST, "numerics.capacity": 20 * initial})
+    assert roomy.summary["capacity"] == 20 * initial
+    assert coupled.summary["steps"] == roomy.summary["steps"]
+    f, g = coupled.fields(), roomy.fields()
+    for name in ("density", "pressure", "velocity"):
+        assert np.max(np.abs(f[name] - g[name])) <= 1e-9 * np.max(np.abs(g[name]))
+    with pytest.raises(SimulationError, match=r"particle pool full.*numerics.capacity >= \d+"):
+        blastfsi.run("cfdmp-shock-tube", set={**FAST, "numerics.capacity": initial})
+
+
+def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
+    """A checkpoint written after the pool grew holds the larger pool; --restart rebuilds the run's initial
+    state, grows its pool to the checkpoint's and continues bit for bit."""
+    import shutil
+
+    from blastfsi.io import results
+
+    end = example_data("cfdmp-shock-tube")["time"]["end"]
+    over = {**FAST, "output.checkpoint_interval": 0.75 * end}
+    res = blastfsi.run("cfdmp-shock-tube", out=tmp_path / "a", set=over)
+    checkpoint = sorted((tmp_path / "a" / "checkpoints").glob("ckpt_*.h5"))
+    assert len(checkpoint) == 1
+    saved, _ = results.read_checkpoint(checkpoint[0])
+    assert saved["mpm.particles.active"].shape[1] == res.summary["capacity"]  # grown before 0.75 end
+    copy = tmp_path / "b"
+    shutil.copytree(tmp_path / "a", copy)
+    again = blastfsi.restart(copy)
+    a, b = res.fields(), again.fields()
+    for key in ("density", "pressure", "velocity"):
+        np.testing.assert_array_equal(a[key], b[key])
+    assert again.summary["steps"] == res.summary["steps"] and again.summary["capacity"] == res.summary["capacity"]
+
+
 def test_bad_input_is_named():
     base = example_data("cfdmp-shock-tube")
 

@@ -172,6 +172,14 @@ class Method(Protocol):
         """Write the method's PNG plots into ``folder`` from each member's setup, history
         and final snapshot (``finals``, as returned by :meth:`snapshot`)."""
 
+    # Optional, for a method with a particle pool that may fill up (its advance passes ``pool_full`` to
+    # timeloop.run_until). The driver then enlarges the pool and goes on (blastfsi.simulation._grow):
+    # pool_leaf: str  -- name of a state leaf whose length (axis 0 of a member) is the pool's capacity
+    # def pool_needed(self, state, setup) -> int: the slots one member's (host) state needs
+    # def grow(self, setup, state, capacity) -> (setup, state) | None: one member's host state in a pool of
+    #     ``capacity`` slots (more than now), the new slots empty; None when the pool is fixed (the scenario
+    #     set its size), and the run then stops with the pool-full fault.
+
 
 FACE = ("name", "scenario_model", "build", "initial_state", "params", "static", "advance", "history_columns",
         "snapshot", "summary", "locate_fault", "plots")

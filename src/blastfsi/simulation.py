@@ -25,7 +25,7 @@ import numpy as np
 from blastfsi import method as methods
 from blastfsi.io import results
 from blastfsi.scenario import ScenarioBase, ScenarioError, expand, parse  # noqa: F401  (parse: for scripts)
-from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_NONE
+from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_NONE, FAULT_POOL_FULL
 
 
 class SimulationError(RuntimeError):
@@ -163,9 +163,12 @@ def _leaf_names(tree) -> list[tuple[str, object]]:
     return [(jax.tree_util.keystr(p).lstrip("."), leaf) for p, leaf in jax.tree_util.tree_flatten_with_path(tree)[0]]
 
 
-def _restore(file: Path, fresh):
-    """The state saved in checkpoint ``file``, checked against the freshly built one."""
+def _restore(file: Path, fresh, fit=None):
+    """The state saved in checkpoint ``file``, checked against the freshly built one (first passed, with
+    the saved leaves, through ``fit``, which may enlarge its particle pool to the saved one's)."""
     saved, _ = results.read_checkpoint(file)
+    if fit is not None:
+        fresh = fit(saved, fresh)
     names = _leaf_names(fresh)
     if sorted(saved) != sorted(n for n, _ in names):
         raise results.OutputError(f"{file}: checkpoint fields {sorted(saved)} do not match this scenario's state "
@@ -175,6 +178,28 @@ def _restore(file: Path, fresh):
             raise results.OutputError(f"{file}: {n} is {saved[n].dtype}{list(saved[n].shape)}, this scenario "
                                       f"needs {leaf.dtype}{list(leaf.shape)}")
     return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(fresh), [jnp.asarray(saved[n]) for n, _ in names])
+
+
+GROWTH = 1.5  # a full particle pool grows to GROWTH x (the particles it needed), in whole thousands
+
+
+def _pool_size(method: methods.Method, state) -> int:
+    """Capacity of the particle pool of a batched state (method.pool_leaf, axis 1)."""
+    return int(np.shape(dict(_leaf_names(state))[method.pool_leaf])[1])
+
+
+def _grow(method: methods.Method, setups: list, state, capacity: int | None = None):
+    """(setups, state) with every member's particle pool enlarged to one common capacity: ``capacity``, or
+    GROWTH x the largest need; None when the method cannot grow its pool (methods.Method, optional hooks)."""
+    if not hasattr(method, "grow"):
+        return None
+    members = _members(state)
+    if capacity is None:
+        capacity = int(np.ceil(GROWTH * max(method.pool_needed(m, setup) for m, setup in zip(members, setups)) / 1000.0)) * 1000
+    grown = [method.grow(setup, m, capacity) for setup, m in zip(setups, members)]
+    if any(g is None for g in grown):
+        return None
+    return [g[0] for g in grown], _stack([g[1]._replace(fault=np.zeros_like(g[1].fault)) for g in grown], "state")
 
 
 def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
@@ -204,7 +229,20 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         last_ckpt = results.latest_checkpoint(out)
         if last_ckpt is None:
             raise results.OutputError(f"--restart: no checkpoint in {out / 'checkpoints'}")
-        state = _restore(last_ckpt, state)
+
+        def fit(saved, fresh):  # a pool that grew before the checkpoint
+            nonlocal setups
+            name = getattr(method, "pool_leaf", None)
+            if name is None or name not in saved or np.shape(saved[name])[1] == _pool_size(method, fresh):
+                return fresh
+            grown = _grow(method, setups, fresh, int(np.shape(saved[name])[1]))
+            if grown is None:
+                return fresh  # (the shape check names the mismatch)
+            setups, fresh = grown
+            return fresh
+
+        state = _restore(last_ckpt, state, fit)
+        static = method.static(setups[0], member_scs[0])
     elif out is not None:
         results.prepare_directory(out, overwrite)
         results.write_scenario(out, sc)
@@ -222,6 +260,13 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         for t_stop in (t for t in stops if t > t_start):
             while np.any(np.asarray(state.t) < t_stop):
                 state = advance(state, params, t_stop, *scalars)
+                grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
+                if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
+                    setups, state = grown
+                    static = method.static(setups[0], member_scs[0])
+                    advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
+                    compile_time += more
+                    continue
                 _check(state, method, setups, sc, last_ckpt)
                 bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
                            float(np.min(np.asarray(state.dt_prev))))
@@ -267,6 +312,8 @@ def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_c
         if fault[k] == FAULT_DT_COLLAPSE:
             what = (f"time step collapsed below time.dt_min_fraction x initial ({sc.time.dt_min_fraction:g} x "
                     f"{float(member.dt0):.3g} s)")
+        elif fault[k] == FAULT_POOL_FULL:
+            what = "particle pool full"
         else:
             what = "non-physical state"
         raise SimulationError(f"{what} in member {k} at t = {float(member.t):.9g} s, step {int(member.step)}: "

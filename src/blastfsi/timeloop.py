@@ -12,17 +12,24 @@ method's three pure functions
 
 until ``t_stop``, ``max_steps`` more steps, or a fault. Steps are shortened to
 land exactly on ``t_stop`` and on every history sample time
-k * sample_interval, where row k is recorded. Fault codes in ``state.fault``:
+k * sample_interval, where row k is recorded. A method with a particle pool
+may pass a fourth function, ``pool_full(state) -> bool``: true when the pool
+has too few free slots for the next step (or the last step could not add the
+particles it needed; the state is still consistent: what did not fit waits
+where it was), and the loop then stops, before stepping, with FAULT_POOL_FULL
+for the driver to enlarge the pool and go on. Fault codes in
+``state.fault``:
 """
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
 
-FAULT_NONE, FAULT_NONPHYSICAL, FAULT_DT_COLLAPSE = 0, 1, 2
+FAULT_NONE, FAULT_NONPHYSICAL, FAULT_DT_COLLAPSE, FAULT_POOL_FULL = 0, 1, 2, 3
 FAULT_MESSAGES = {
     FAULT_NONPHYSICAL: "non-physical state",
     FAULT_DT_COLLAPSE: "time step collapsed",
+    FAULT_POOL_FULL: "particle pool full",
 }
 CLOCK_FIELDS = ("t", "dt_prev", "dt0", "step", "fault", "hist", "hist_next")
 
@@ -34,7 +41,8 @@ def clock(n_samples: int, n_columns: int, dtype) -> dict:
                 hist=jnp.full((n_samples, n_columns), jnp.nan, dtype), hist_next=jnp.zeros((), jnp.int32))
 
 
-def run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction, *, stable_dt, step, history_row):
+def run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction, *, stable_dt, step, history_row,
+              pool_full=None):
     """Advance ``state`` in one ``lax.while_loop`` (see module docstring).
 
     ``dt0`` is the first stable step of the run; a later stable step below
@@ -64,6 +72,8 @@ def run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction, *, s
         st = st._replace(dt0=dt0)
         fault = jnp.where(dt_stable > 0.0, jnp.where(dt_stable >= dt_floor_fraction * dt0, FAULT_NONE,
                                                      FAULT_DT_COLLAPSE), FAULT_NONPHYSICAL)
+        if pool_full is not None:
+            fault = jnp.where(pool_full(st), FAULT_POOL_FULL, fault)
 
         def go(st):
             target = jnp.minimum(t_stop, next_sample_time(st))

@@ -9,6 +9,7 @@ the domain boundary, against its value at activation.
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import NamedTuple
 
@@ -64,6 +65,14 @@ class Static(NamedTuple):
     coupling: cp.Static
     gauge_cells: tuple
     capacity: int
+    pool_margin: int  # a growing pool counts as full when fewer slots are free than one step can fill (one
+    #                   inflow particle per face cell and material), so no emission is ever refused; 0 for a
+    #                   fixed pool, full when an emission did not fit
+
+
+def _pool_margin(setup: problem.Setup) -> int:
+    n_face_cells = sum(int(f.outside.size) for f in setup.faces)
+    return n_face_cells * len(setup.gas_material) if setup.info["capacity_grows"] else 0
 
 
 def _maps(s: State) -> blast_maps.BlastMaps:
@@ -105,6 +114,7 @@ def system_totals(U, P: mpm.Particles, res: cp.Reservoirs, layout: cp.Layout, st
 class Cfdmp:
     name = "cfdmp"
     scenario_model = CfdmpScenario
+    pool_leaf = "mpm.particles.active"  # (the driver grows a full pool: blastfsi.method, optional hooks)
 
     def build(self, sc: CfdmpScenario) -> problem.Setup:
         return problem.build(sc)
@@ -131,7 +141,7 @@ class Cfdmp:
                              tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
                              bool(np.any(setup.outflow_area)))
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
-        return Static(coupling, flat, setup.capacity)
+        return Static(coupling, flat, setup.capacity, _pool_margin(setup))
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         e = setup.euler
@@ -233,8 +243,7 @@ class Cfdmp:
 
         def stable_dt(s):
             dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
-            dt = jnp.minimum(dt, jnp.where(s.coupled, mpm.stable_dt(s.mpm, params.mpm, mcfg), jnp.inf))
-            return jnp.where(s.budget.required > static.capacity, jnp.nan, dt)
+            return jnp.minimum(dt, jnp.where(s.coupled, mpm.stable_dt(s.mpm, params.mpm, mcfg), jnp.inf))
 
         # each branch returns the new state and the viewed grid (blast maps), one gas P2G per step
         def euler_only(s, dt):
@@ -296,7 +305,9 @@ class Cfdmp:
             return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])
 
         return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
-                                  stable_dt=stable_dt, step=step, history_row=history_row)
+                                  stable_dt=stable_dt, step=step, history_row=history_row,
+                                  pool_full=lambda s: jnp.maximum(s.budget.required, jnp.sum(s.mpm.particles.active))
+                                  + static.pool_margin > static.capacity)
 
     @staticmethod
     def _view(s: State, cs: cp.Static, lay: cp.Layout):
@@ -363,11 +374,29 @@ class Cfdmp:
         return Coupled(grid=Grid(edges=edges, cell_fields=fields),
                        particles=Particles(positions=np.asarray(P.x)[on, :g.ndim], point_fields=points))
 
+    @staticmethod
+    def pool_needed(state: State, setup: problem.Setup) -> int:
+        active = int(np.sum(np.asarray(state.mpm.particles.active)))
+        return max(int(state.budget.required), active + _pool_margin(setup))
+
+    @staticmethod
+    def grow(setup: problem.Setup, state: State, capacity: int):
+        """One member's host state in a pool of ``capacity`` slots, the new ones empty at the end (the slots
+        in use keep their indices); None when ``numerics.capacity`` fixed the pool."""
+        if not setup.info["capacity_grows"]:
+            return None
+        P = state.mpm.particles
+        pad = mpm.empty(capacity - setup.capacity, P.point.history.shape[1], P.mass.dtype)
+        grown = jax.tree_util.tree_map(lambda a, b: np.concatenate([np.asarray(a), np.asarray(b)]), P, pad)
+        setup = dataclasses.replace(setup, capacity=int(capacity), info={**setup.info, "capacity": int(capacity)})
+        return setup, state._replace(mpm=state.mpm._replace(particles=grown))
+
     def locate_fault(self, state: State, setup: problem.Setup) -> str:
         budget = state.budget
         if int(budget.required) > setup.capacity:
             return (f"particle pool capacity {setup.capacity} is too small: the bridge needed "
-                    f"{int(budget.required)} active particles; set numerics.capacity >= {int(budget.required)}")
+                    f"{int(budget.required)} active particles; set numerics.capacity >= {int(budget.required)} "
+                    f"(or leave it unset: the default pool grows)")
         cs = self._static(setup, 0).coupling
         prm = self.params(setup, np.asarray(state.U).dtype)
         U = jnp.asarray(state.U)

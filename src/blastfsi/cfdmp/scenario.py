@@ -63,8 +63,9 @@ class CfdmpNumerics(SharedNumerics):
         "PIC share alpha of the gas particles' G2P velocity (FLIP/PIC blend, its kinetic-energy loss heats the "
         "particle; 0: pure FLIP; structures stay FLIP)"))
     capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
-        "particle pool size (default: structures + 3 x the gas particles of the box; with MPM everywhere, "
-        "which creates none, structures + the gas particles)"))
+        "fixed particle pool size: the run stops when the bridge needs more (default: a pool of structures + "
+        "1.25 x the gas particles of the box that grows as the bridge fills it; with MPM everywhere, which "
+        "creates none, structures + the gas particles)"))
 
 
 class CfdmpScenario(ScenarioBase):
