@@ -229,7 +229,7 @@ def view(U, rows, gas_mass, layout: Layout):
     return jnp.where(layout.fictitious & (gas_mass > 0.0), rows, U)
 
 
-def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static) -> mpm.musl.NodalSource:
+def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, stencil=None) -> mpm.musl.NodalSource:
     """The gas beyond the box faces that lie on an outflow face of the domain, on those faces' MPM nodes:
     it continues the gas inside (zero gradient, like the Eulerian outflow ghost cells) instead of the vacuum a
     free MPM face would be. The particles give such a node only the half of its support inside the box; the
@@ -237,7 +237,8 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static) -> mpm.musl.
     a full support) and the traction -p_I A n, p_I the mass-weighted pressure of the gas particles around
     the node (a node on k such faces: 2^k - 1 mirrors). Without the mirror mass a rarefied node (gas blown
     past a slab's corner) took the whole traction on a sliver of mass, and a gas at rest in such a box ran
-    away (tests/test_cfdmp.py)."""
+    away (tests/test_cfdmp.py). ``stencil``: the particles' (idx, w) when the caller has them (the MUSL
+    step's own, see mpm.musl.step)."""
     cfg = static.mpm
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
@@ -246,7 +247,7 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static) -> mpm.musl.
     slot = _gas_index(static, P.material)
     m = jnp.where(P.active & (slot >= 0), P.mass, 0.0)
     p = -(P.point.stress[:, 0] + P.point.stress[:, 1] + P.point.stress[:, 2]) / 3.0 + P.q
-    idx, w, _ = mpm.materialised_stencil(P, cfg.grid, cfg.shape)
+    idx, w = stencil if stencil is not None else mpm.materialised_stencil(P, cfg.grid, cfg.shape)[:2]
     nodal = mpm.musl.particle_to_grid(idx, [w * m, w * (m * p)] + [w * (m * P.v[:, i]) for i in range(d)],
                                       cfg.grid.num_nodes, cfg.combined_scatter)
     # a node on k such faces gets 1 / 2^k of its support from the particles: the mirrors add 2^k - 1 times that
@@ -257,9 +258,10 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static) -> mpm.musl.
                                 p_node[:, None] * layout.outflow_area)
 
 
-def interface_source(prim_flat: dict, layout: Layout, static: Static, P: mpm.Particles) -> mpm.musl.NodalSource:
+def interface_source(prim_flat: dict, layout: Layout, static: Static):
     """000 Eqs. (37)-(39): the ring cells as particles of mass rho V and stress -p I; plus the outflow
-    gas of :func:`outflow_ghost` beyond box faces that lie on outflow faces of the domain."""
+    gas of :func:`outflow_ghost` beyond box faces that lie on outflow faces of the domain. Returns the
+    source as a function of the particles and their stencil, which the MUSL step calls with its own."""
     grid = static.mpm.grid
     d = grid.dim
     V = cell_measure(static.euler)
@@ -275,8 +277,11 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static, P: mpm.Par
     mass = scatter(w * (rho * V))
     mom = jnp.stack([scatter(w * (rho * V * vel[i])) for i in range(d)], axis=1)
     force = jnp.stack([scatter(layout.ring_grad[i] * (p * V)) for i in range(d)], axis=1)
-    ghost = outflow_ghost(P, layout, static)
-    return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force)
+    def source(P: mpm.Particles, idx, w) -> mpm.musl.NodalSource:
+        ghost = outflow_ghost(P, layout, static, (idx, w))
+        return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force)
+
+    return source
 
 
 def face_transfers(T, static: Static):

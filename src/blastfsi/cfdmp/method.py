@@ -254,7 +254,7 @@ class Cfdmp:
             return s, s.U
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.outflow_ghost(s.mpm.particles, lay, cs))
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, (idx, w)))
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
             return s._replace(mpm=ms, reservoirs=res, budget=budget), cp.view(s.U, rows, gas_volume, lay)
@@ -262,7 +262,7 @@ class Cfdmp:
         def coupled(s, dt):
             eos = params.euler.eos
             prim = cp.flat_primitives(s.U, eos, cfg)
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs, s.mpm.particles))
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs))
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
             U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)

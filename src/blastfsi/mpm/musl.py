@@ -315,7 +315,9 @@ def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
 
 def step(state: State, dt, params: Params, config: Config, source: NodalSource | None = None) -> State:
     """One MUSL step of length dt (module docstring). Pure; jit with ``config`` static.
-    ``source``: nodal mass, momentum and force from outside the particles (a coupled run), or None.
+    ``source``: nodal mass, momentum and force from outside the particles (a coupled run), or None; or a
+    function ``source(particles, idx, w) -> NodalSource`` called with this step's stencil (a source that
+    depends on the particles' own nodal sums then needs no stencil of its own).
 
     Grid vectors carry the grid's ``dim`` components (the padded particle
     components stay zero); per-particle stencil arrays are kept component by
@@ -354,6 +356,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         channels += [amw] + [amw * P.v[:, i] for i in range(d)]
     nodal = particle_to_grid(idx, channels, n_nodes, combined)
     m_I, p_I, f_I = nodal[:, 0], nodal[:, 1:1 + d], nodal[:, 1 + d:1 + 2 * d]  # Eqs. (21), (18), (19)
+    if callable(source):
+        source = source(P, idx, w)
     if source is not None:  # Eqs. (37)-(39)
         m_I, p_I, f_I = m_I + source.mass, p_I + source.momentum, f_I + source.force
     f_I = f_I + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
