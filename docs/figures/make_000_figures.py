@@ -70,7 +70,14 @@ def _restored(folder: Path, name: str, time: float | None):
     if time is not None:
         _, ckpt_times, _ = simulation.stop_times(sc)
         k = max(i for i, t in enumerate(ckpt_times) if t <= time)
-        state = simulation._restore(folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5", state)
+
+        def fit(saved, fresh):  # the checkpoint's pool may have grown
+            nonlocal setup
+            (setup,), fresh = simulation.fit_pool(method, [setup], saved, fresh)
+            return fresh
+
+        state = simulation._restore(folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5", state, fit)
+        static = method.static(setup, scs[0])
     scalars = (20_000, sc.time.end / (n - 1), sc.time.dt_min_fraction)
     advance, _ = simulation.compiled_advance(method, static, state, params, sc.time.end, *scalars)
     return method, setup, advance, state, params, scalars

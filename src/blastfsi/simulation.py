@@ -202,6 +202,16 @@ def _grow(method: methods.Method, setups: list, state, capacity: int | None = No
     return [g[0] for g in grown], _stack([g[1]._replace(fault=np.zeros_like(g[1].fault)) for g in grown], "state")
 
 
+def fit_pool(method: methods.Method, setups: list, saved: dict, fresh):
+    """(setups, fresh) with the particle pool of the freshly built state ``fresh`` enlarged to that of the
+    checkpoint leaves ``saved`` (a pool that grew before the checkpoint); unchanged otherwise."""
+    name = getattr(method, "pool_leaf", None)
+    if name is None or name not in saved or np.shape(saved[name])[1] == _pool_size(method, fresh):
+        return setups, fresh
+    grown = _grow(method, setups, fresh, int(np.shape(saved[name])[1]))
+    return (setups, fresh) if grown is None else grown  # (not grown: the shape check names the mismatch)
+
+
 def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
         restart: bool = False, chunk_steps: int = 20_000) -> Result:
     """Run a scenario given as a raw dict (or a list of them, see
@@ -230,15 +240,9 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         if last_ckpt is None:
             raise results.OutputError(f"--restart: no checkpoint in {out / 'checkpoints'}")
 
-        def fit(saved, fresh):  # a pool that grew before the checkpoint
+        def fit(saved, fresh):
             nonlocal setups
-            name = getattr(method, "pool_leaf", None)
-            if name is None or name not in saved or np.shape(saved[name])[1] == _pool_size(method, fresh):
-                return fresh
-            grown = _grow(method, setups, fresh, int(np.shape(saved[name])[1]))
-            if grown is None:
-                return fresh  # (the shape check names the mismatch)
-            setups, fresh = grown
+            setups, fresh = fit_pool(method, setups, saved, fresh)
             return fresh
 
         state = _restore(last_ckpt, state, fit)
