@@ -212,10 +212,9 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     Both stages run in one fori_loop body (compiled once). moved: None, or per
     axis a tuple of face-transfer rows (faces 0..n of that axis) onto which the
     step's transfers (module docstring) are added; then (U_new, moved) is
-    returned. Static: the plain step carries no transfers. Recording runs each
-    stage exactly as the plain step does and recomputes its fluxes from the
-    same input behind an optimization barrier (see
-    blastfsi.euler.step.step_with_transfers for why).
+    returned. Static: the plain step carries no transfers. Recording reads the
+    fluxes off the stage's own evaluation (one pass; U_new agrees with the
+    plain step's to round-off, see blastfsi.euler.step.step_with_transfers).
     """
     a = jnp.asarray([0.0, 0.5], U.dtype)
     rows0 = tuple(U)
@@ -224,31 +223,44 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
         return tuple(a[i] * x0 + (1.0 - a[i]) * (x + dt * k) for x0, x, k in zip(start, now, rate))
 
     spec = blocks(cfg)
+    record = moved is not None
+    moved0 = tuple(moved) if record else None
 
-    def plain(i, rows):
+    def advance_transfers(i, start, now, fluxes):  # they advance like the state, L replaced by flux / dx
+        return tuple(combine(i, m0, m, tuple(f / cfg.dx for f in fl)) for m0, m, fl in zip(start, now, fluxes))
+
+    def stage(i, state):  # state: the rows, or (rows, transfers) when recording
+        rows, acc = state if record else (state, None)
         if spec is None:
-            return combine(i, rows0, rows, rhs(rows, eos_r, cfg, lay))
+            out = rhs(rows, eos_r, cfg, lay, record)
+            total, fluxes = out if record else (out, None)
+            new = combine(i, rows0, rows, total)
+            return (new, advance_transfers(i, moved0, acc, fluxes)) if record else new
         b, ch = spec
         cells = tuple(pad(x, b, cfg.bc[b], NG, -1.0 if r == lay.n + b else None)
                       for r, x in enumerate(primitive_rows(rows, eos_r, lay)))
 
-        def block(j, outs):  # outs: the stage result, written block by block over its input rows
+        def block(j, outs):  # outs: the stage result (and transfers), written block by block over its input
             start = j * ch
-            cut = lambda x: jax.lax.dynamic_slice_in_dim(x, start, ch, axis=b)  # noqa: E731
-            now = tuple(map(cut, outs))
+            cut = lambda x, faces=0: jax.lax.dynamic_slice_in_dim(x, start, ch + faces, axis=b)  # noqa: E731
+            put = lambda o, x: jax.lax.dynamic_update_slice_in_dim(o, x, start, axis=b)  # noqa: E731
+            now = tuple(map(cut, outs[0] if record else outs))
             halo = tuple(jax.lax.dynamic_slice_in_dim(x, start, ch + 2 * NG, axis=b) for x in cells)
-            new = combine(i, tuple(map(cut, rows0)), now, rate(halo, now, eos_r, cfg, lay, b))
-            return tuple(jax.lax.dynamic_update_slice_in_dim(o, x, start, axis=b) for o, x in zip(outs, new))
-        return jax.lax.fori_loop(0, cfg.shape[b] // ch, block, rows)
+            out = rate(halo, now, eos_r, cfg, lay, b, record)
+            total, fluxes = out if record else (out, None)
+            new = tuple(map(put, outs[0] if record else outs, combine(i, tuple(map(cut, rows0)), now, total)))
+            if not record:
+                return new
+            # axis b's faces start..start+ch of this block (the last one shared with the next block, which
+            # computes it from the same cells): read from the transfers at the stage's start, not from outs
+            span = [1 if a == b else 0 for a in range(len(fluxes))]
+            t = tuple(tuple(put(o, x) for o, x in zip(o_a, advance_transfers(
+                i, (tuple(cut(x, e) for x in m0),), (tuple(cut(x, e) for x in m),), (fl,))[0]))
+                for o_a, m0, m, fl, e in zip(outs[1], moved0, acc, fluxes, span))
+            return new, t
+        return jax.lax.fori_loop(0, cfg.shape[b] // ch, block, state)
 
-    if moved is None:
-        return jnp.stack(jax.lax.fori_loop(0, 2, plain, rows0))
-    moved0 = tuple(moved)
-
-    def stage(i, state):  # the transfers advance like the state, with L replaced by the face fluxes / dx
-        _, fluxes = rhs(jax.lax.optimization_barrier(state[0]), eos_r, cfg, lay, record=True)
-        return plain(i, state[0]), tuple(
-            combine(i, m0, m, tuple(f / cfg.dx for f in fl)) for m0, m, fl in zip(moved0, state[1], fluxes))
-
+    if not record:
+        return jnp.stack(jax.lax.fori_loop(0, 2, stage, rows0))
     rows, moved = jax.lax.fori_loop(0, 2, stage, (rows0, moved0))
     return jnp.stack(rows), moved

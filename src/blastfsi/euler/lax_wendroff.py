@@ -181,9 +181,9 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     axis a tuple of face-transfer rows (faces 0..n of that axis) onto which
     the transfers of the operators along that axis are summed; then
     (U_new, moved) is returned. Static: the plain step carries no transfers.
-    Recording runs each operator exactly as the plain step does and recomputes
-    its transfers from the same input behind an optimization barrier (see
-    blastfsi.euler.step.step_with_transfers for why).
+    Recording reads the transfers off the operator's own intermediates (one
+    pass; U_new agrees with the plain step's to round-off, not bit for bit:
+    see blastfsi.euler.step.step_with_transfers).
     """
     ndim = len(cfg.shape)
     order = jnp.asarray(tuple(reversed(range(ndim))) + tuple(range(ndim)))
@@ -197,15 +197,16 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
         if moved is None:
             return plain
 
-        def add_transfers(ins, acc):
-            _, t = sweep(ins[:-1], ins[-1], 0.5 * dt, eos_r, cfg, lay, a, record=True)
-            return tuple(m + x for m, x in zip(acc, t))
+        nvar = len(rows)
+
+        def sweep_and_add(cc, outs):  # outs: the rows, then the transfers of axis a so far
+            new, t = sweep(outs[:nvar], cc[0], 0.5 * dt, eos_r, cfg, lay, a, record=True)
+            return new + tuple(m + x for m, x in zip(outs[nvar:], t))
 
         def recording(state):  # the transfers of all axes are carried, those of axis a added to
             rows, acc = state
-            rows_b, c_b = jax.lax.optimization_barrier((rows, c))
-            new_acc = blocked(add_transfers, rows_b + (c_b,), acc[a], cfg, a)
-            return plain(rows), acc[:a] + (new_acc,) + acc[a + 1:]
+            out = blocked(sweep_and_add, (c,), rows + acc[a], cfg, a)
+            return out[:nvar], acc[:a] + (out[nvar:],) + acc[a + 1:]
         return recording
 
     branches = [body(a) for a in range(ndim)]

@@ -113,7 +113,7 @@ def face_shape(cfg: Config, axis: int) -> tuple:
 
 
 def step_with_transfers(U, dt, params: Params, cfg: Config):
-    """(U_new, transfers): U_new bit-identical to step(U, dt, params, cfg) and the amounts each face passed.
+    """(U_new, transfers): U_new as step(U, dt, params, cfg) gives it and the amounts each face passed.
 
     transfers: one array per axis a, of shape (nvar, *face_shape(cfg, a)). T[r, ..., f, ...] is the
     amount of row r moved across face f of axis a (between cells f-1 and f) from the low to the
@@ -129,15 +129,12 @@ def step_with_transfers(U, dt, params: Params, cfg: Config):
     row holds its conservative part (the flux of alpha u, with Lax-Wendroff's viscous term); its
     alpha div u term is a cell source. Schemes: lax_wendroff.py and hllc.py (module docstrings).
 
-    Cost about twice a plain step: XLA:CPU contracts a*b + c into fused multiply-adds depending on
-    how it fuses operations, so reading the transfers off the update's own intermediates changed
-    the last bits of U_new (1 ulp, in 5 of the 10 configurations of tests/test_euler_transfers.py;
-    bit-identical in all 10 with FMA disabled, XLA_FLAGS=--xla_cpu_max_isa=SSE4_2). The kernels
-    therefore run the plain update unchanged and recompute the transfers from the same input
-    behind jax.lax.optimization_barrier (no fusion or common-subexpression sharing with the
-    update); they balance U_new to round-off. Bit-identity holds between step and
-    step_with_transfers compiled alike (e.g. each jitted on its own); a step traced inside a
-    different enclosing computation may differ in its last bits.
+    Both schemes read the transfers off the update's own intermediates, at about the cost of a
+    plain step. XLA:CPU then contracts a*b + c into fused multiply-adds differently, so U_new may
+    differ from step's in the last bits (1 ulp, in 5 of the 10 configurations of
+    tests/test_euler_transfers.py; bit-identical in all 10 with FMA disabled,
+    XLA_FLAGS=--xla_cpu_max_isa=SSE4_2); recomputing the transfers behind an optimization barrier
+    kept U_new bit-identical at twice the cost. The transfers balance U_new to round-off.
     """
     lay, eos_r = _setup(U, params, cfg)
     zeros = tuple((jnp.zeros(face_shape(cfg, a), U.dtype),) * lay.nvar for a in range(lay.ndim))
