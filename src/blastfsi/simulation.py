@@ -25,7 +25,7 @@ import numpy as np
 from blastfsi import method as methods
 from blastfsi.io import results
 from blastfsi.scenario import ScenarioBase, ScenarioError, expand, parse  # noqa: F401  (parse: for scripts)
-from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_NONE, FAULT_POOL_FULL
+from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_MESSAGES, FAULT_NONE, FAULT_POOL_FULL
 
 
 class SimulationError(RuntimeError):
@@ -195,7 +195,8 @@ def _grow(method: methods.Method, setups: list, state, capacity: int | None = No
         return None
     members = _members(state)
     if capacity is None:
-        capacity = int(np.ceil(GROWTH * max(method.pool_needed(m, setup) for m, setup in zip(members, setups)) / 1000.0)) * 1000
+        needed = max(method.pool_needed(m, setup) for m, setup in zip(members, setups))
+        capacity = int(np.ceil(GROWTH * needed / 1000.0)) * 1000
     grown = [method.grow(setup, m, capacity) for setup, m in zip(setups, members)]
     if any(g is None for g in grown):
         return None
@@ -317,10 +318,8 @@ def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_c
         if fault[k] == FAULT_DT_COLLAPSE:
             what = (f"time step collapsed below time.dt_min_fraction x initial ({sc.time.dt_min_fraction:g} x "
                     f"{float(member.dt0):.3g} s)")
-        elif fault[k] == FAULT_POOL_FULL:
-            what = "particle pool full"
         else:
-            what = "non-physical state"
+            what = FAULT_MESSAGES[int(fault[k])]
         raise SimulationError(f"{what} in member {k} at t = {float(member.t):.9g} s, step {int(member.step)}: "
                               f"{location}; {where}")
     if np.any(np.asarray(state.step) >= sc.time.max_steps):

@@ -277,6 +277,10 @@ class Cfdmp:
             dp = self._pressure(viewed, params, cs) - params.reference_pressure
             return new._replace(**blast_maps.update(_maps(new), dp, s.t, dt, params.arrival_threshold)._asdict())
 
+        def pool_full(s):  # (Static.pool_margin)
+            in_use = jnp.maximum(s.budget.required, jnp.sum(s.mpm.particles.active))
+            return in_use + static.pool_margin > static.capacity
+
         def history_row(s):
             P = s.mpm.particles
             total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, lay, cs)
@@ -305,9 +309,7 @@ class Cfdmp:
             return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])
 
         return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
-                                  stable_dt=stable_dt, step=step, history_row=history_row,
-                                  pool_full=lambda s: jnp.maximum(s.budget.required, jnp.sum(s.mpm.particles.active))
-                                  + static.pool_margin > static.capacity)
+                                  stable_dt=stable_dt, step=step, history_row=history_row, pool_full=pool_full)
 
     @staticmethod
     def _view(s: State, cs: cp.Static, lay: cp.Layout):

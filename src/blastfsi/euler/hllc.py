@@ -30,6 +30,7 @@
 """
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
@@ -226,8 +227,8 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     record = moved is not None
     moved0 = tuple(moved) if record else None
 
-    def advance_transfers(i, start, now, fluxes):  # they advance like the state, L replaced by flux / dx
-        return tuple(combine(i, m0, m, tuple(f / cfg.dx for f in fl)) for m0, m, fl in zip(start, now, fluxes))
+    def advance_axis(i, start, now, flux):  # one axis's transfers advance like the state, L -> flux / dx
+        return combine(i, start, now, tuple(f / cfg.dx for f in flux))
 
     def stage(i, state):  # state: the rows, or (rows, transfers) when recording
         rows, acc = state if record else (state, None)
@@ -235,7 +236,7 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
             out = rhs(rows, eos_r, cfg, lay, record)
             total, fluxes = out if record else (out, None)
             new = combine(i, rows0, rows, total)
-            return (new, advance_transfers(i, moved0, acc, fluxes)) if record else new
+            return (new, tuple(map(functools.partial(advance_axis, i), moved0, acc, fluxes))) if record else new
         b, ch = spec
         cells = tuple(pad(x, b, cfg.bc[b], NG, -1.0 if r == lay.n + b else None)
                       for r, x in enumerate(primitive_rows(rows, eos_r, lay)))
@@ -253,11 +254,12 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
                 return new
             # axis b's faces start..start+ch of this block (the last one shared with the next block, which
             # computes it from the same cells): read from the transfers at the stage's start, not from outs
-            span = [1 if a == b else 0 for a in range(len(fluxes))]
-            t = tuple(tuple(put(o, x) for o, x in zip(o_a, advance_transfers(
-                i, (tuple(cut(x, e) for x in m0),), (tuple(cut(x, e) for x in m),), (fl,))[0]))
-                for o_a, m0, m, fl, e in zip(outs[1], moved0, acc, fluxes, span))
-            return new, t
+            t = []
+            for axis, (o_a, m0, m, fl) in enumerate(zip(outs[1], moved0, acc, fluxes)):
+                e = 1 if axis == b else 0
+                upd = advance_axis(i, tuple(cut(x, e) for x in m0), tuple(cut(x, e) for x in m), fl)
+                t.append(tuple(map(put, o_a, upd)))
+            return new, tuple(t)
         return jax.lax.fori_loop(0, cfg.shape[b] // ch, block, state)
 
     if not record:

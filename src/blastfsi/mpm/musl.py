@@ -349,6 +349,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if config.prescribed:
         mwp = jnp.where(P.prescribed, mw, 0.0)
         channels += [mwp] + [mwp * P.prescribed_velocity[:, i] for i in range(d)]
+    blend_at = len(channels)
     if config.blend:  # the alpha-weighted nodal mass and momentum of the blend heat (step 3)
         alpha = params.pic_fraction[jnp.clip(P.material, 0, len(config.models) - 1)]
         alpha = jnp.where(act & ~P.prescribed, alpha, 0.0) if config.prescribed else jnp.where(act, alpha, 0.0)
@@ -369,21 +370,21 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     # G2P: Eq. (24), and Eq. (25) with the updated nodal velocity (ERRATA 000-5)
     table = [v_new - v_old, v_new]
     if config.blend:
-        k = 1 + 2 * d + (1 + d if config.prescribed else 0)
-        m_a = nodal[:, k]
-        u_I = nodal[:, k + 1:k + 1 + d] / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]
+        m_a = nodal[:, blend_at]
+        u_I = nodal[:, blend_at + 1:blend_at + 1 + d] / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]
         table.append(jnp.sum(v_new * u_I, axis=1, keepdims=True))
     moved = grid_to_particle(idx, w, jnp.concatenate(table, axis=1), combined)
-    v_flip = P.v + _pad3(moved[:d])
+    increment, pic = _pad3(moved[:d]), _pad3(moved[d:2 * d])  # S (n - g), S n
+    v_flip = P.v + increment
     if config.blend:  # step 3: v_p = v_FLIP - alpha delta, and the heat c_p
-        delta = P.v - _pad3(moved[d:2 * d]) + _pad3(moved[:d])  # v_p^n - S g, S g = S n - S (n - g)
+        old_grid = pic - increment  # S g
+        delta = P.v - old_grid
         v_p = jnp.where(act[:, None], v_flip - alpha[:, None] * delta, P.v)
-        pic, old_grid = _pad3(moved[d:2 * d]), _pad3(moved[d:2 * d]) - _pad3(moved[:d])
-        blend_heat = alpha * (moved[2 * d] - jnp.sum(pic * old_grid, axis=1)) + (alpha - 0.5 * alpha ** 2) * jnp.sum(
-            delta * delta, axis=1)
+        blend_heat = (alpha * (moved[2 * d] - jnp.sum(pic * old_grid, axis=1))
+                      + (alpha - 0.5 * alpha ** 2) * jnp.sum(delta * delta, axis=1))
     else:
         v_p, blend_heat = jnp.where(act[:, None], v_flip, P.v), 0.0
-    x_p = jnp.where(act[:, None], P.x + dt * _pad3(moved[d:2 * d]), P.x)
+    x_p = jnp.where(act[:, None], P.x + dt * pic, P.x)
     if config.prescribed:
         v_p = jnp.where(P.prescribed[:, None], P.prescribed_velocity, v_p)
         x_p = jnp.where((P.prescribed & act)[:, None], P.x + dt * P.prescribed_velocity, x_p)
