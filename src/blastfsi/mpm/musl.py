@@ -290,27 +290,36 @@ def _pad3(columns):
     return jnp.stack(list(columns) + [zero] * (3 - len(columns)), axis=1)
 
 
+def materialise(compute, operand, nonempty):
+    """``compute(operand)`` evaluated once and kept in memory, not fused into its consumers.
+
+    XLA:CPU fuses an elementwise producer into each of its consumers, so a value read by
+    many fusions (the basis functions, floor, clip and piecewise polynomials; the strain
+    increments, each a stencil sum of gathered nodal velocities) is recomputed inside every
+    one of them, and it strips optimization barriers. A conditional is a boundary fusion
+    cannot cross: ``compute`` runs in one branch (taken when ``nonempty``; the other returns
+    zeros of the same shapes, right for an empty pool).
+    """
+    def zeros(a):
+        return jax.tree_util.tree_map(lambda z: jnp.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
+
+    return jax.lax.cond(nonempty, compute, zeros, operand)
+
+
 def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     """:func:`stencil` of the active particles (zero weights for inactive ones).
 
-    XLA:CPU fuses an elementwise producer into each of its consumers, so the
-    basis functions (floor, clip, piecewise polynomials) would be recomputed
-    inside each of the ~20 per-channel fusions that read them, and it strips
-    optimization barriers. A conditional is a boundary fusion cannot cross: the
-    per-direction factors (k values per particle and direction) are computed
-    in one branch (taken whenever the pool is non-empty; the other returns
-    zeros, right for an empty pool) and so materialised once; their tensor
-    products stay cheap enough to be fused into the consumers.
+    The per-direction factors (k values per particle and direction) are
+    materialised (:func:`materialise`), not recomputed in each of the ~20
+    per-channel fusions that read them; their tensor products stay cheap
+    enough to be fused into the consumers.
     """
     def compute(p):
         per_dim = factors(p.x, p.half_size, grid, shape)
         (node, N, dN), rest = per_dim[0], per_dim[1:]
         return ((node, jnp.where(p.active, N, 0.0), jnp.where(p.active, dN, 0.0)),) + rest
 
-    def zeros(p):
-        return jax.tree_util.tree_map(lambda a: jnp.zeros(a.shape, a.dtype), jax.eval_shape(compute, p))
-
-    return expand(jax.lax.cond(jnp.any(P.active), compute, zeros, P))
+    return expand(materialise(compute, P, jnp.any(P.active)))
 
 
 def step(state: State, dt, params: Params, config: Config, source: NodalSource | None = None) -> State:
@@ -406,7 +415,10 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
     # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the gas
     energy = ps.energy - P.q * dvol / ps.density + blend_heat
-    new = _material_update(ps._replace(density=rho, energy=energy), dstrain, dspin, dt, P.material, params, config)
+    # the models read the increments many times: materialised, not recomputed from the gathers in each read
+    # (measured, 3D Johnson-Cook: the step 1.25x faster)
+    model_in = materialise(lambda a: a, (ps._replace(density=rho, energy=energy), dstrain, dspin), jnp.any(act))
+    new = _material_update(*model_in, dt, P.material, params, config)
     c = wave_speed(new, P.material, params, config, pool=True)
     rate = dvol / dt
     q = bulk_viscosity(rho, c, rate, grid.cell_size, params.q_quadratic, params.q_linear)
