@@ -139,6 +139,22 @@ def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     assert again.summary["steps"] == res.summary["steps"] and again.summary["capacity"] == res.summary["capacity"]
 
 
+def test_euler_cfl_sets_the_eulerian_courant_number_only():
+    """numerics.euler_cfl is the Eulerian step's Courant number, numerics.cfl stays the MPM's; unset, both
+    are numerics.cfl."""
+    import jax.numpy as jnp
+
+    from blastfsi import api, method as methods
+    from blastfsi.scenario import expand
+
+    cfdmp = methods.get("cfdmp")
+    for over, (euler, particles) in (({}, (0.4, 0.4)), ({"numerics.euler_cfl": 0.8}, (0.8, 0.4)),
+                                     ({"numerics.cfl": 0.3, "numerics.euler_cfl": 0.6}, (0.6, 0.3))):
+        prm = cfdmp.params(cfdmp.build(expand(api.load("cfdmp-shock-tube", set={**FAST, **over}))[2][0]),
+                           jnp.float64)
+        assert (float(prm.euler.cfl), float(prm.mpm.cfl)) == (euler, particles)
+
+
 def test_bad_input_is_named():
     base = example_data("cfdmp-shock-tube")
 

@@ -149,7 +149,7 @@ class Cfdmp:
         nd = e.grid.ndim
         grid = setup.grid
         kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype))
-        mp = mpm.make_params(setup.model_params, cfl=info["cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
+        mp = mpm.make_params(setup.model_params, cfl=info["mpm_cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
                              pic_fraction=info["pic_fraction"], dtype=dtype)
         shape = mpm.SHAPES[info["shape_functions"]]
         half = np.zeros((setup.ring_cells.size, 3))
@@ -421,13 +421,16 @@ class Cfdmp:
     def summary(self, sc: CfdmpScenario, setup: problem.Setup, hist: dict, state: State) -> dict:
         e = setup.euler
         t = float(state.t)
+        # a charge run starts at the remap time (simulated time 0): arrival times are from the detonation, as
+        # the euler method reports them
+        t0 = float(e.info.get("remap_time", 0.0))
         gauges = []
         for pos, cell in zip(e.gauges, e.gauge_cells):
             arrival, end = float(state.arrival[cell]), float(state.end[cell])
             region = "euler" if setup.outside[cell] else ("particles" if setup.fictitious[cell] else "bridge")
             gauges.append({"position": [float(v) for v in pos], "region": region,
                            "peak_overpressure": float(state.peak[cell]), "impulse": float(state.impulse[cell]),
-                           "arrival_time": arrival if np.isfinite(arrival) else None,
+                           "arrival_time": t0 + arrival if np.isfinite(arrival) else None,
                            "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None})
         coupled = np.asarray(hist["coupled"]) > 0.5
         n = len(e.materials)
@@ -435,6 +438,7 @@ class Cfdmp:
         baseline = np.asarray(state.baseline)
         out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
                "dx": e.grid.dx, "bridge_cells": setup.info["bridge_cells"],
+               **({"remap_time": t0} if "remap_time" in e.info else {}),
                "coupled_faces": setup.info["coupled_faces"],
                "activation_time": float(hist["time"][np.argmax(coupled)]) if coupled.any() else None,
                "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,

@@ -55,7 +55,12 @@ GAS_PIC_FRACTION = 0.05
 
 class CfdmpNumerics(SharedNumerics):
     scheme: Literal["lax-wendroff", "hllc-muscl"] = Field("hllc-muscl", description="Eulerian scheme")
-    cfl: float = Field(0.4, gt=0.0, le=1.0, description="Courant number of both solvers (one common step)")
+    cfl: float = Field(0.4, gt=0.0, le=1.0, description=(
+        "Courant number of the MPM step, and of the Eulerian one unless euler_cfl is set (one common step: the "
+        "smaller of the two)"))
+    euler_cfl: Optional[float] = Field(None, gt=0.0, le=1.0, description=(
+        "Courant number of the Eulerian step (default: cfl). HLLC-MUSCL's is taken on the sum of the directions' "
+        "signal speeds (stable to 1), so at equal numbers its step is 1/ndim of the MPM's"))
     shape: Literal["linear", "gimp"] = Field("gimp", description="MPM shape functions")
     q_quadratic: float = Field(DEFAULT_QUADRATIC, ge=0.0, le=10.0, description="MPM bulk viscosity C_q")
     q_linear: float = Field(DEFAULT_LINEAR, ge=0.0, le=10.0, description="MPM bulk viscosity C_l")

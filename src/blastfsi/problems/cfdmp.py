@@ -103,13 +103,17 @@ def _cell_index(sc: CfdmpScenario, value: float, ax: int, dx: float, key: str) -
     return int(round(n))
 
 
+def _euler_cfl(sc: CfdmpScenario) -> float:
+    return sc.numerics.cfl if sc.numerics.euler_cfl is None else sc.numerics.euler_cfl
+
+
 def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
     """The Eulerian part as an ``euler`` scenario. A charge's automatic remap time must also come before
     the blast reaches the MPM box: its point nearest to the charge is added as a last gauge (dropped again
     by :func:`build`)."""
     data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
                                   "time", "output"})
-    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": sc.numerics.cfl,
+    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": _euler_cfl(sc),
                                           "precision": sc.numerics.precision})
     if sc.initial.kind == "charge" and sc.initial.remap_time is None:
         centre = np.asarray(sc.initial.center or [0.0] * sc.domain.ndim, float)
@@ -305,7 +309,7 @@ def build(sc: CfdmpScenario) -> Setup:
                 structure_particles=n_struct, gas_particles=int(gvol.size), capacity=int(capacity),
                 capacity_grows=bool(faces) and sc.numerics.capacity is None,
                 mpm_materials=list(names), activation_overpressure=box.activation_overpressure,
-                gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape,
+                gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape, mpm_cfl=sc.numerics.cfl,
                 q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
                 pic_fraction=[sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))])
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
