@@ -9,7 +9,9 @@ Runs (all through ``blastfsi.run``, the shipped examples with the overrides name
   and the slab at the end; ``field-at`` continues a checkpoint to the time of Fig. 12;
 * ``w2``, ``w8``: the same with ``mpm_region.bridge_cells`` = 2, 8 (Fig. 11);
 * ``cfdmp-32.5us``, ``mpm-32.5us``: ``he-slab-2d`` and ``he-slab-2d-mpm`` to 32.5 us, the time of Fig. 12,
-  with the final field written: pressure in the interaction region side by side, and the wall times.
+  with the final field written: pressure in the interaction region side by side, and the wall times;
+* ``w5-1mm``, ``mpm-incident``: the incident pulse at the gauges on a 1 mm grid and with MPM everywhere,
+  beside the 1D Lagrangian run of the same charge (``figures`` runs it: the reference at r = 125 mm).
 
     python docs/figures/make_000_figures.py field-at DIR RUN TIME OUT   # RUN's fields at TIME from a checkpoint
     python docs/figures/make_000_figures.py step-cost DIR              # s per step of both Fig. 12 set-ups
@@ -39,6 +41,10 @@ RUNS = {
     "cfdmp-32.5us": ("he-slab-2d", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131,
                                     "output.checkpoint_interval": 2.5e-6}),
     "mpm-32.5us": ("he-slab-2d-mpm", {"time.end": FIG12_TIME, "output.fields": 2, "output.history_samples": 131}),
+    # the incident pulse at both gauges on a 1 mm grid (w = 5, bridge 5 mm) and with MPM everywhere at 2 mm
+    "w5-1mm": ("he-slab-2d", {"grid.cells": 340, "time.end": 1.325e-5, "output.history_samples": 266,
+                              "output.fields": 0}),
+    "mpm-incident": ("he-slab-2d-mpm", {"time.end": 1.325e-5, "output.history_samples": 266, "output.fields": 0}),
 }
 
 
@@ -134,14 +140,16 @@ def _last_snapshot(folder: Path):
 
 def gauge_metrics(summary: dict) -> list[dict]:
     keys = ("position", "region", "peak_overpressure", "impulse", "arrival_time", "positive_phase_duration")
-    return [{k: g[k] for k in keys} | {"positive_phase_over": g["arrival_time"] + g["positive_phase_duration"]
+    t0 = summary.get("remap_time", 0.0)  # arrival times are from the detonation, the run's time from the remap
+    return [{k: g[k] for k in keys} | {"positive_phase_over": g["arrival_time"] - t0 + g["positive_phase_duration"]
                                         < summary["time"]} for g in summary["gauges"]]
 
 
-def incident_pulse(h: dict, threshold: float = 0.01) -> dict:
+def incident_pulse(h: dict, t0: float = 0.0, threshold: float = 0.01) -> dict:
     """Peak, impulse and arrival of both gauges over the incident pulse only: from 0 to the first minimum of
     gauge 1 (the Eulerian side, undisturbed by the slab) after its peak. Later, gauge 2 (9 mm in front of
-    the slab) also records the wave reflected by the slab, which gauge 1 never sees."""
+    the slab) also records the wave reflected by the slab, which gauge 1 never sees. Arrival times from the
+    detonation (``t0``: the remap time, simulated time 0), like the summary's."""
     t = h["time"]
     g1, g2 = h["gauge0_overpressure"], h["gauge1_overpressure"]
     k = int(np.argmax(g1))
@@ -153,8 +161,23 @@ def incident_pulse(h: dict, threshold: float = 0.01) -> dict:
         peak = float(gw.max())
         hit = np.nonzero(gw > threshold * peak)[0]
         out.append({"peak_overpressure": peak, "impulse": float(np.trapezoid(np.maximum(gw, 0.0), tw)),
-                    "arrival_time": float(tw[hit[0]]) if hit.size else None})
+                    "arrival_time": t0 + float(tw[hit[0]]) if hit.size else None})
     return {"window_end": float(t[end]), "gauges": out, "gauge2_over_gauge1": symmetry(out)}
+
+
+def reference_1d(t0: float, window_end: float, zones=(1600, 3200)) -> list[dict]:
+    """The same cylindrical charge on the 1D Lagrangian solver (sharp products/air contact, graded zones),
+    the blast at r = 125 mm (both gauges) before the slab's reflection: peak and arrival over the incident
+    pulse window, at two zonings (finer ones fail at the burn front, docs/verification.md)."""
+    from blastfsi.detonation.charge import run_1d
+
+    out = []
+    for n in zones:
+        res = run_1d("tnt", 0.05, n, 0.5, t0 + window_end, {"gamma": 1.4, "pressure": 101325.0, "density": 1.225},
+                     [0.125], 0.01, j=1)
+        g = res.summary["gauges"][0]
+        out.append({"zones": n, "peak_overpressure": g["peak_overpressure"], "arrival_time": g["arrival_time"]})
+    return out
 
 
 def symmetry(gauges: list[dict]) -> dict:
@@ -172,13 +195,19 @@ def fig10_11(folder: Path, out: dict) -> None:
         s, h = _summary(folder / name), _history(folder / name)
         g = gauge_metrics(s)
         out["bridge_width"][name] = {"bridge_cells": s["bridge_cells"], "gauges": g, "gauge2_over_gauge1": symmetry(g),
-                                     "incident_pulse": incident_pulse(h),
+                                     "incident_pulse": incident_pulse(h, s.get("remap_time", 0.0)),
                                      "steps": s["steps"], "wall_time": s["wall_time"], "budget": s["budget"],
                                      "structures": s.get("structures")}
         t = h["time"] * 1e6
         if name == "w5":
             axes[0].plot(t, h["gauge0_overpressure"] / 1e6, label="gauge 1 (-125, 250) mm, Eulerian")
             axes[0].plot(t, h["gauge1_overpressure"] / 1e6, "--", label="gauge 2 (125, 250) mm, MPM")
+            pulse = out["bridge_width"][name]["incident_pulse"]
+            ref = reference_1d(s.get("remap_time", 0.0), pulse["window_end"])
+            out["reference_1d"] = {"what": "1D cylindrical Lagrangian run of the charge, r = 125 mm, to the end of "
+                                           "the incident pulse window", "runs": ref}
+            axes[0].axhline(ref[-1]["peak_overpressure"] / 1e6, color="0.5", lw=0.8,
+                            label=f"1D Lagrangian peak ({ref[-1]['zones']} zones)")
         axes[1].plot(t, h["gauge1_overpressure"] / 1e6, label=f"gauge 2, w = {s['bridge_cells']}")
         if name == "w5":
             axes[1].plot(t, h["gauge0_overpressure"] / 1e6, "k:", label="gauge 1 (w = 5)")
@@ -189,6 +218,22 @@ def fig10_11(folder: Path, out: dict) -> None:
     fig.tight_layout()
     fig.savefig(HERE / "he_slab_2d_gauges.png", dpi=120)
     plt.close(fig)
+
+
+def resolution(folder: Path, out: dict) -> None:
+    """The incident pulse at both gauges against the 1D reference: w = 5 at 2 mm and 1 mm, MPM everywhere at
+    2 mm (both its gauges read particles)."""
+    ref = out.get("reference_1d", {}).get("runs", [{}])[-1].get("peak_overpressure")
+    rows = {}
+    for name in ("w5", "w5-1mm", "mpm-incident"):
+        if not (folder / name / "summary.json").exists():
+            continue
+        s, h = _summary(folder / name), _history(folder / name)
+        pulse = incident_pulse(h, s.get("remap_time", 0.0))
+        rows[name] = {"dx": s["dx"], "gauges": pulse["gauges"], "gauge2_over_gauge1": pulse["gauge2_over_gauge1"],
+                      "peak_over_reference_1d": [g["peak_overpressure"] / ref - 1.0 for g in pulse["gauges"]]
+                      if ref else None, "steps": s["steps"], "wall_time": s["wall_time"]}
+    out["resolution"] = rows
 
 
 def _region_pressure(snap):
@@ -283,6 +328,7 @@ def slab(folder: Path, out: dict) -> None:
 def figures(folder: Path) -> None:
     out: dict = {}
     fig10_11(folder, out)
+    resolution(folder, out)
     fig12(folder, out)
     slab(folder, out)
     (HERE / "he_slab_2d.json").write_text(json.dumps(out, indent=1))
