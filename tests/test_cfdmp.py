@@ -248,6 +248,53 @@ def test_gas_at_rest_stays_at_rest_on_outflow_box_faces():
     assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14
 
 
+def test_outflow_mirror_is_one_way():
+    """The mirror gas of a flow-out box face models outflow and rest only (no gas enters there): on the
+    face's nodes it is whole for outflow, scaled by 1 + u_n / (INFLOW_MACH c) for slow inflow and gone for
+    inflow faster than INFLOW_MACH c (outflow_ghost's docstring; in he-slab-2d the mirror's traction on
+    gas drawn back into the box drove it to c = 142 km/s)."""
+    import jax.numpy as jnp
+
+    from blastfsi import method as methods
+    from blastfsi.cfdmp import coupling as cp
+    from blastfsi.scenario import parse
+
+    state = {"material": "air", "density": 1.2, "pressure": 1.0e5}
+    d = {"method": "cfdmp", "name": "mirror-2d", "domain": {"lower": [0.0, 0.0], "upper": [0.06, 0.03]},
+         "boundaries": {"x": ["outflow", "outflow"], "y": ["wall", "wall"]}, "grid": {"cells": 30},
+         "initial": {"kind": "riemann", "diaphragm": 0.02, "left": state, "right": state},
+         "mpm_region": {"lower": [0.03, 0.0], "upper": [0.06, 0.03], "activation_overpressure": 0.0},
+         "time": {"end": 1.0e-5}}
+    sc = parse(d)
+    cfdmp = methods.get("cfdmp")
+    setup = cfdmp.build(sc)
+    cs, prm = cfdmp.static(setup, sc).coupling, cfdmp.params(setup, jnp.float64)
+    st = cfdmp.initial_state(setup, sc, 2, jnp.float64)
+    ms, _ = cp.activate(st.U, st.mpm, cp.flat_primitives(st.U, prm.euler.eos, cs.euler), prm.euler.eos, prm.mpm,
+                        cs, prm.layout)
+    area = np.asarray(prm.layout.outflow_area)
+    face = area[:, 0] != 0.0  # the upper x face (the box's only face on a flow-out boundary)
+    assert face.sum() == cs.mpm.grid.nodes[1] and np.all(area[face, 0] < 0.0)
+    c = float(np.max(np.asarray(ms.particles.wave_speed)))
+    assert c == pytest.approx(np.sqrt(1.4 * 1.0e5 / 1.2), rel=1e-12)
+
+    def mirror(mach):
+        P = ms.particles
+        P = P._replace(v=P.v.at[:, 0].set(jnp.where(P.active, mach * c, 0.0)))
+        src = cp.outflow_ghost(P, prm.layout, cs)
+        return np.asarray(src.mass)[face], np.asarray(src.force)[face, 0]
+
+    m_out, f_out = mirror(0.5)
+    assert np.all(m_out > 0.0)
+    np.testing.assert_allclose(f_out, 1.0e5 * area[face, 0], rtol=1e-12)  # the traction -p A n of the gas
+    half = 0.5 * cp.INFLOW_MACH
+    m_half, f_half = mirror(-half)
+    np.testing.assert_allclose(m_half, 0.5 * m_out, rtol=1e-9)
+    np.testing.assert_allclose(f_half, 0.5 * f_out, rtol=1e-9)
+    m_in, f_in = mirror(-2.0 * cp.INFLOW_MACH)
+    assert np.all(m_in == 0.0) and np.all(f_in == 0.0)
+
+
 def test_structure_fragments_leave_through_a_flow_out_face():
     """A steel block flying at 600 m/s out through the flow-out face the MPM box shares with the domain:
     its particles are deleted as they cross (before, the first one off the grid stopped the run as a
