@@ -172,12 +172,18 @@ def reference_1d(t0: float, window_end: float, zones=(1600, 3200)) -> list[dict]
     """The same cylindrical charge on the 1D Lagrangian solver (sharp products/air contact, graded zones),
     the blast at r = 125 mm (both gauges) before the slab's reflection: peak and arrival over the incident
     pulse window, at two zonings (finer ones fail at the burn front, docs/verification.md)."""
-    from blastfsi.detonation.charge import run_1d
+    from blastfsi import api
+    from blastfsi.detonation.charge import _ambient, run_1d
+    from blastfsi.scenario import parse
 
+    sc = parse(api.example_data("he-slab-2d"))  # the shipped charge, ambient air and gauges
+    _, air, rho_a, p_a = _ambient(sc)
+    gas = {"gamma": air.gamma, "pressure": p_a, "density": rho_a}
+    r = float(np.hypot(*np.subtract(sc.output.gauges[0], sc.initial.center)))
     out = []
     for n in zones:
-        res = run_1d("tnt", 0.05, n, 0.5, t0 + window_end, {"gamma": 1.4, "pressure": 101325.0, "density": 1.225},
-                     [0.125], 0.01, j=1)
+        res = run_1d(sc.initial.explosive, sc.initial.radius, n, 0.5, t0 + window_end, gas, [r],
+                     sc.output.arrival_fraction, j=1)
         g = res.summary["gauges"][0]
         out.append({"zones": n, "peak_overpressure": g["peak_overpressure"], "arrival_time": g["arrival_time"]})
     return out
