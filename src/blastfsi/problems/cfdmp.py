@@ -103,17 +103,14 @@ def _cell_index(sc: CfdmpScenario, value: float, ax: int, dx: float, key: str) -
     return int(round(n))
 
 
-def _euler_cfl(sc: CfdmpScenario) -> float:
-    return sc.numerics.cfl if sc.numerics.euler_cfl is None else sc.numerics.euler_cfl
-
-
 def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
     """The Eulerian part as an ``euler`` scenario. A charge's automatic remap time must also come before
     the blast reaches the MPM box: its point nearest to the charge is added as a last gauge (dropped again
     by :func:`build`)."""
     data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
                                   "time", "output"})
-    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": _euler_cfl(sc),
+    euler_cfl = sc.numerics.euler_cfl or sc.numerics.cfl  # (euler_cfl > 0 when set)
+    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": euler_cfl,
                                           "precision": sc.numerics.precision})
     if sc.initial.kind == "charge" and sc.initial.remap_time is None:
         centre = np.asarray(sc.initial.center or [0.0] * sc.domain.ndim, float)
