@@ -148,24 +148,18 @@ def gauge_metrics(summary: dict) -> list[dict]:
                                         < summary["time"]} for g in summary["gauges"]]
 
 
-def incident_pulse(h: dict, t0: float = 0.0, threshold: float = 0.01) -> dict:
-    """Peak, impulse and arrival of both gauges over the incident pulse only: from 0 to the first minimum of
-    gauge 1 (the Eulerian side, undisturbed by the slab) after its peak. Later, gauge 2 (9 mm in front of
-    the slab) also records the wave reflected by the slab, which gauge 1 never sees. Arrival times from the
-    detonation (``t0``: the remap time, simulated time 0), like the summary's."""
-    t = h["time"]
-    g1, g2 = h["gauge0_overpressure"], h["gauge1_overpressure"]
-    k = int(np.argmax(g1))
-    end = k + int(np.argmax(np.diff(g1[k:]) > 0.0))  # first sample where gauge 1 rises again
-    window = slice(0, end + 1)
-    out = []
-    for g in (g1, g2):
-        gw, tw = g[window], t[window]
-        peak = float(gw.max())
-        hit = np.nonzero(gw > threshold * peak)[0]
-        out.append({"peak_overpressure": peak, "impulse": float(np.trapezoid(np.maximum(gw, 0.0), tw)),
-                    "arrival_time": t0 + float(tw[hit[0]]) if hit.size else None})
-    return {"window_end": float(t[end]), "gauges": out, "gauge2_over_gauge1": symmetry(out)}
+def incident_pulse(h: dict, t0: float = 0.0) -> dict:
+    """Peak, impulse and arrival of both gauges over the incident pulse only
+    (:func:`blastfsi.diagnostics.profiles.incident_pulse`): to the first minimum of gauge 1 (the Eulerian
+    side, undisturbed by the slab) after its peak. Later, gauge 2 (9 mm in front of the slab) also records
+    the wave reflected by the slab, which gauge 1 never sees. Arrival times from the detonation (``t0``:
+    the remap time, simulated time 0), like the summary's."""
+    from blastfsi.diagnostics.profiles import incident_pulse as pulse
+
+    out = pulse(h["time"], np.stack([h["gauge0_overpressure"], h["gauge1_overpressure"]], axis=1))
+    for g in out["gauges"]:
+        g["arrival_time"] = t0 + g["arrival_time"] if g["arrival_time"] is not None else None
+    return {**out, "gauge2_over_gauge1": symmetry(out["gauges"])}
 
 
 def reference_1d(t0: float, window_end: float, zones=(1600, 3200)) -> list[dict]:

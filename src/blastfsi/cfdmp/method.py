@@ -133,7 +133,8 @@ class Cfdmp:
         slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)
                       for k in range(len(setup.models)))
         mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots,
-                               blend=any(a > 0.0 for a in setup.info["pic_fraction"]))
+                               blend=any(a > 0.0 for a in setup.info["pic_fraction"]),
+                               relax=tuple(setup.gas_material) if setup.info["pressure_relaxation"] else ())
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
         sizes = tuple(int(f.outside.size) for f in setup.faces)
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))

@@ -14,9 +14,7 @@ from typing import Literal, Optional
 from pydantic import Field, model_validator
 
 from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial
-from blastfsi.mpm.scenario import Body
-from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
-from blastfsi.scenario import Numerics as SharedNumerics
+from blastfsi.mpm.scenario import Body, MPMNumerics
 from blastfsi.scenario import ScenarioBase, Strict
 
 # Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
@@ -53,7 +51,10 @@ class MPMRegion(Strict):
 GAS_PIC_FRACTION = 0.05
 
 
-class CfdmpNumerics(SharedNumerics):
+class CfdmpNumerics(MPMNumerics):
+    """The MPM solver's numerics (bulk viscosity, pressure relaxation) with the coupled run's defaults, and
+    the Eulerian scheme's."""
+
     scheme: Literal["lax-wendroff", "hllc-muscl"] = Field("hllc-muscl", description="Eulerian scheme")
     cfl: float = Field(0.4, gt=0.0, le=1.0, description=(
         "Courant number of the MPM step, and of the Eulerian one unless euler_cfl is set (one common step: the "
@@ -62,8 +63,6 @@ class CfdmpNumerics(SharedNumerics):
         "Courant number of the Eulerian step (default: cfl). HLLC-MUSCL's is taken on the sum of the directions' "
         "signal speeds (stable to 1), so at equal numbers its step is 1/ndim of the MPM's"))
     shape: Literal["linear", "gimp"] = Field("gimp", description="MPM shape functions")
-    q_quadratic: float = Field(DEFAULT_QUADRATIC, ge=0.0, le=10.0, description="MPM bulk viscosity C_q")
-    q_linear: float = Field(DEFAULT_LINEAR, ge=0.0, le=10.0, description="MPM bulk viscosity C_l")
     gas_pic_fraction: float = Field(GAS_PIC_FRACTION, ge=0.0, le=1.0, description=(
         "PIC share alpha of the gas particles' G2P velocity (FLIP/PIC blend, its kinetic-energy loss heats the "
         "particle; 0: pure FLIP; structures stay FLIP)"))

@@ -66,7 +66,7 @@ def update(ps: PointState, dstrain, dspin, dt, params: FluidParams) -> PointStat
     f_old = 1.0 - ps.history[:, 2]
     f_new = burn_fraction(clock, ps.history[:, 1], params.detonation_velocity, f_old)
     rho_old = T.old_density(ps.density, de)
-    p_old = f_old * jwl.pressure(rho_old, ps.energy, params.eos)  # 000 Eq. (52)
+    p_old = pressure(ps._replace(density=rho_old), params)  # 000 Eq. (52)
     zero = jnp.zeros_like(ps.stress)
     energy, p_new = T.energy_implicit(
         ps.energy, zero, zero, p_old,
@@ -74,6 +74,11 @@ def update(ps: PointState, dstrain, dspin, dt, params: FluidParams) -> PointStat
         f_new * params.eos.omega * ps.density, de, rho_old)
     history = jnp.stack([clock, ps.history[:, 1], 1.0 - f_new], axis=-1)
     return ps._replace(stress=T.compose(zero, p_new), energy=energy, history=history)
+
+
+def pressure(ps: PointState, params: FluidParams):
+    """p = F p_EOS(rho, e) at the particle's state, 000 Eq. (52)."""
+    return (1.0 - ps.history[:, 2]) * jwl.pressure(ps.density, ps.energy, params.eos)
 
 
 def wave_speed(ps: PointState, params: FluidParams):

@@ -27,3 +27,24 @@ def front_position(xc, p, level: float) -> float:
 def l1_relative_error(values, reference, widths) -> float:
     """sum |values - reference| dx / sum |reference| dx."""
     return float(np.sum(np.abs(values - reference) * widths) / np.sum(np.abs(reference) * widths))
+
+
+def incident_pulse(time, gauges, reference: int = 0, arrival_fraction: float = 0.01) -> dict:
+    """Peak, positive impulse and arrival of every gauge over the incident pulse only: from the first sample
+    to the first one after the ``reference`` gauge's peak where that gauge rises again (a gauge that
+    never sees a reflection sets the window; later, a gauge in front of a structure records the reflected
+    wave too). ``gauges`` (n, G) overpressure histories; arrival: the first sample above
+    ``arrival_fraction`` of the gauge's own peak. Returns the window's end and one dict per gauge."""
+    t = np.asarray(time)
+    g = np.asarray(gauges)
+    ref = g[:, reference]
+    k = int(np.argmax(ref))
+    end = k + int(np.argmax(np.diff(ref[k:]) > 0.0))
+    tw, gw = t[:end + 1], g[:end + 1]
+    out = []
+    for col in gw.T:
+        peak = float(col.max())
+        hit = np.nonzero(col > arrival_fraction * peak)[0]
+        out.append({"peak_overpressure": peak, "impulse": float(np.trapezoid(np.maximum(col, 0.0), tw)),
+                    "arrival_time": float(tw[hit[0]]) if hit.size else None})
+    return {"window_end": float(t[end]), "gauges": out}

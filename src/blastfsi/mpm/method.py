@@ -87,8 +87,10 @@ class MPM:
         return problem.build(sc)
 
     def static(self, setup: problem.Setup, sc: MPMScenario) -> Static:
+        gases = tuple(k for k, m in enumerate(setup.models) if m.name == "fluid")
+        relax = gases if sc.numerics.pressure_relaxation and len(gases) > 1 else ()
         return Static(mpm.make_config(setup.grid, setup.models, shape=sc.numerics.shape,
-                                      prescribed=setup.prescribed), setup.tracers)
+                                      prescribed=setup.prescribed, relax=relax), setup.tracers)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         sc = setup.info["numerics"]

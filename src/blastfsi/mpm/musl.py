@@ -40,7 +40,10 @@ One step of length dt (all particle loops are whole-array operations):
 5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28);
    density, Eq. (29) (rho / (1 + d eps_kk); no deformation gradient is kept);
    q work heats the particle (000 Eq. 13 with p -> p + q); stress, energy and
-   history by each material's model (Jaumann rate, Eq. 30, inside the model);
+   history by each material's model (Jaumann rate, Eq. 30, inside the model),
+   from the start state with the gas particles of different materials that
+   share nodes relaxed towards one pressure (only when ``Config.relax``,
+   :mod:`blastfsi.mpm.relaxation`);
    new signal speed and q (ERRATA 000-10, :mod:`blastfsi.mpm.viscosity`).
 
 Dimensions: positions and velocities always have 3 components. 1D is uniaxial
@@ -73,6 +76,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from blastfsi.constitutive import Model, PointState
+from blastfsi.mpm import relaxation
 from blastfsi.mpm.grid import Grid, apply_boundaries, inside
 from blastfsi.mpm.particles import ParticleError, Particles, totals
 from blastfsi.mpm.shape import SHAPES, Shape, expand, factors
@@ -97,6 +101,8 @@ class Config:
     blend: bool = False  # some materials have a PIC share (Params.pic_fraction > 0; adds its channels)
     model_slots: tuple | None = None  # per model, the pool slots (start, stop) its particles can occupy
     #                                   (None: all): a model's update runs on those slots only
+    relax: tuple = ()  # gas materials (fluid model) relaxed to a common pressure where they share nodes
+    #                    (:mod:`blastfsi.mpm.relaxation`; empty: off)
 
 
 class Params(NamedTuple):
@@ -125,13 +131,15 @@ class NodalSource(NamedTuple):
 
 
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
-                combined_scatter: bool | None = None, model_slots=None, blend: bool = False) -> Config:
+                combined_scatter: bool | None = None, model_slots=None, blend: bool = False,
+                relax=()) -> Config:
     """Checked :class:`Config`; ``combined_scatter`` defaults to True except on
     the CPU backend (see :func:`particle_to_grid`); ``model_slots``: per model the
     pool slots (start, stop) its particles can occupy, or None for all (a coupled run keeps
     the structures in the first slots and the gas after them: each model then runs on its
     own part of the pool only); ``blend``: some material will have a PIC share (without it, Params.pic_fraction
-    is not read and the step is pure FLIP)."""
+    is not read and the step is pure FLIP); ``relax``: two or more material indices of fluid-model gases
+    whose particles relax to a common pressure where they share nodes (:mod:`blastfsi.mpm.relaxation`)."""
     if shape not in SHAPES:
         raise MPMError(f"numerics.shape: expected one of {tuple(SHAPES)}, got {shape!r}")
     models = tuple(models)
@@ -144,8 +152,12 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
         if len(model_slots) != len(models) or any(not 0 <= a <= b for a, b in model_slots):
             raise MPMError(f"model_slots: expected one (start, stop) with 0 <= start <= stop per model, "
                            f"got {model_slots!r}")
+    relax = tuple(int(k) for k in relax)
+    if relax and (len(relax) < 2 or len(set(relax)) < len(relax)
+                  or any(not 0 <= k < len(models) or models[k].name != "fluid" for k in relax)):
+        raise MPMError(f"relax: expected two or more distinct material indices of fluid-model gases, got {relax!r}")
     return Config(grid=grid, shape=SHAPES[shape], models=models, prescribed=bool(prescribed),
-                  combined_scatter=bool(combined_scatter), model_slots=model_slots, blend=bool(blend))
+                  combined_scatter=bool(combined_scatter), model_slots=model_slots, blend=bool(blend), relax=relax)
 
 
 def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=DEFAULT_LINEAR,
@@ -412,6 +424,11 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     dstrain = _tensor(sym)
     dspin = _tensor(skew) if skew else jnp.zeros_like(dstrain)
     ps = P.point
+    if config.relax:  # gases sharing nodes brought towards one pressure (compliance from the last step's c)
+        relaxed = relaxation.relax(ps, m, P.material, P.wave_speed, idx, w, config.relax, n_nodes,
+                                   scatter=lambda ch: particle_to_grid(idx, ch, n_nodes, combined),
+                                   interpolate=lambda t: grid_to_particle(idx, w, t, combined))
+        ps = ps._replace(density=relaxed[0], energy=relaxed[1])
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
     # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the gas
     energy = ps.energy - P.q * dvol / ps.density + blend_heat

@@ -139,6 +139,10 @@ class MPMNumerics(SharedNumerics):
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="dt = cfl h / max signal speed")
     q_quadratic: float = Field(DEFAULT_QUADRATIC, ge=0.0, le=10.0, description="bulk viscosity C_q (ERRATA 000-10)")
     q_linear: float = Field(DEFAULT_LINEAR, ge=0.0, le=10.0, description="bulk viscosity C_l (ERRATA 000-10)")
+    pressure_relaxation: bool = Field(True, description=(
+        "gas particles of different materials (detonation products, air) that share grid nodes relax to a "
+        "common pressure, as the Eulerian mixture cells do (blastfsi.mpm.relaxation); false: they take the "
+        "same strain, and a products/air contact over-compresses the air"))
     capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
         "particle pool size (default: the particles the bodies create)"))
 
