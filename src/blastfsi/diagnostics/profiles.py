@@ -29,17 +29,22 @@ def l1_relative_error(values, reference, widths) -> float:
     return float(np.sum(np.abs(values - reference) * widths) / np.sum(np.abs(reference) * widths))
 
 
-def incident_pulse(time, gauges, reference: int = 0, arrival_fraction: float = 0.01) -> dict:
+def incident_pulse(time, gauges, reference: int = 0, arrival_fraction: float = 0.01, fall: float = 0.5) -> dict:
     """Peak, positive impulse and arrival of every gauge over the incident pulse only: from the first sample
-    to the first one after the ``reference`` gauge's peak where that gauge rises again (a gauge that
-    never sees a reflection sets the window; later, a gauge in front of a structure records the reflected
-    wave too). ``gauges`` (n, G) overpressure histories; arrival: the first sample above
-    ``arrival_fraction`` of the gauge's own peak. Returns the window's end and one dict per gauge."""
+    to the first one after the ``reference`` gauge's peak where that gauge, fallen below ``fall`` of its
+    peak, rises again (a gauge that never sees a reflection sets the window; later, a gauge in front of a
+    structure records the reflected wave too; ``fall`` keeps a wiggle behind the peak from ending it).
+    ``gauges`` (n, G) overpressure histories; arrival: the first sample above ``arrival_fraction`` of the
+    gauge's own peak. Returns the window's end and one dict per gauge."""
     t = np.asarray(time)
     g = np.asarray(gauges)
     ref = g[:, reference]
     k = int(np.argmax(ref))
-    end = k + int(np.argmax(np.diff(ref[k:]) > 0.0))
+    turning = (np.diff(ref[k:]) > 0.0) & (ref[k:-1] < fall * ref[k])
+    if not turning.any():
+        raise ValueError("the reference gauge does not fall below fall x its peak and rise again: no incident "
+                         "pulse to cut")
+    end = k + int(np.argmax(turning))
     tw, gw = t[:end + 1], g[:end + 1]
     out = []
     for col in gw.T:
