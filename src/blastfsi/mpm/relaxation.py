@@ -6,7 +6,7 @@ both from a mixed Eulerian cell) both take the same volumetric strain: an iso-st
 stiffer of the two there (rho c^2 = gamma p ~ 47 MPa for air at 34 MPa, ~ 27 MPa for the products at
 21 MPa), so a decelerating contact over-compresses it: in he-slab-2d (w = 5, 2 mm, 10 us after the
 remap) air particles next to products stood at 44 MPa while the products beside them held 21 MPa, and
-the mixed cells this made lifted gauge 2's peak 10 % above gauge 1's. The Eulerian cells assume pressure
+the mixed cells this made lifted gauge 2's peak 10-13 % above gauge 1's (docs/cfdmp.md, step 11). The Eulerian cells assume pressure
 equilibrium between the phases they hold (the mixture closure of ERRATA 000-9); this kernel gives the
 particles the same: an instantaneous mechanical relaxation (Saurel & Abgrall, JCP 150 (1999) 425) that
 exchanges volume between the gas particles of a node at the node's equilibrium pressure.
@@ -25,7 +25,8 @@ energy are conserved exactly. Every particle of a material moves by its material
 so the pressure differences within a material (its gradient) are left as they are: an earlier version that
 relaxed each particle's own pressure to p*_I flattened the products' gradient wherever a trace of air
 shared their nodes. chi_I = clip((1 - max_k A_kI / sum_k A_kI) / MIXED, 0, 1) (one minus the largest
-material's share of the node's compliance) confines the exchange to nodes where the materials meet: single-gas runs are unchanged.
+material's share of the node's compliance) confines the exchange to nodes where the materials meet:
+single-gas runs are unchanged.
 s_I = min(1, MAX_VOLUME_CHANGE / (max_k |pbar_kI - p*_I| max_p 1/K_p)) bounds |dV_p| / V_p by
 MAX_VOLUME_CHANGE. The MUSL step relaxes the state the step starts from (pressures of the last step,
 compliances from its sound speeds, the step's stencil), before the strain increment and the material
