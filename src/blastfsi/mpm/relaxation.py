@@ -8,9 +8,9 @@ stiffer of the two there (rho c^2 = gamma p ~ 47 MPa for air at 34 MPa, ~ 27 MPa
 remap) air particles next to products stood at 44 MPa while the products beside them held 21 MPa,
 and the mixed cells this made lifted gauge 2's peak 10-13 % above gauge 1's (docs/cfdmp.md, step 11).
 The Eulerian cells assume pressure equilibrium between the phases they hold (the mixture closure of
-ERRATA 000-9); this kernel gives the
-particles the same: an instantaneous mechanical relaxation (Saurel & Abgrall, JCP 150 (1999) 425) that
-exchanges volume between the gas particles of a node at the node's equilibrium pressure.
+ERRATA 000-9); this kernel gives the particles the same: an instantaneous mechanical relaxation (Saurel
+& Abgrall, JCP 150 (1999) 425) that exchanges volume between the gas particles of a node at the node's
+equilibrium pressure.
 
 Per gas particle p of material k (mass m, volume V, pressure p_p, compliance a_p = V_p / K_p, K = rho c^2
 the adiabatic bulk modulus) and node I (shape function N_Ip):
