@@ -25,6 +25,7 @@ from blastfsi.diagnostics import blast_maps
 from blastfsi.euler.method import GEOMETRY_CODE, SCHEME_CODE
 from blastfsi.euler.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
+from blastfsi.mpm import relaxation
 from blastfsi.mpm.method import VOIGT_TO_TENSOR
 from blastfsi.problems import cfdmp as problem
 
@@ -134,7 +135,7 @@ class Cfdmp:
                       for k in range(len(setup.models)))
         mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots,
                                blend=any(a > 0.0 for a in setup.info["pic_fraction"]),
-                               relax=tuple(setup.gas_material) if setup.info["pressure_relaxation"] else ())
+                               relax=relaxation.gas_materials(setup.models, setup.info["pressure_relaxation"]))
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
         sizes = tuple(int(f.outside.size) for f in setup.faces)
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))

@@ -34,6 +34,7 @@ import numpy as np
 
 from blastfsi import mpm, timeloop
 from blastfsi.method import Particles, register
+from blastfsi.mpm import relaxation
 from blastfsi.mpm.scenario import AXES, MPMScenario
 from blastfsi.problems import mpm as problem
 
@@ -87,8 +88,7 @@ class MPM:
         return problem.build(sc)
 
     def static(self, setup: problem.Setup, sc: MPMScenario) -> Static:
-        gases = tuple(k for k, m in enumerate(setup.models) if m.name == "fluid")
-        relax = gases if sc.numerics.pressure_relaxation and len(gases) > 1 else ()
+        relax = relaxation.gas_materials(setup.models, sc.numerics.pressure_relaxation)
         return Static(mpm.make_config(setup.grid, setup.models, shape=sc.numerics.shape,
                                       prescribed=setup.prescribed, relax=relax), setup.tracers)
 

@@ -48,6 +48,13 @@ MIXED = 0.01  # minority share of a node's gas compliance from which its particl
 MAX_VOLUME_CHANGE = 0.25  # largest relative volume change of a particle in one relaxation
 
 
+def gas_materials(models, enabled: bool = True) -> tuple:
+    """The material indices to relax (``Config.relax``): every fluid-model material when ``enabled`` and there
+    are two or more of them, else none."""
+    gases = tuple(k for k, m in enumerate(models) if m.name == "fluid")
+    return gases if enabled and len(gases) > 1 else ()
+
+
 def relax(point: PointState, mass, material, wave_speed, idx, w, gas: tuple, num_nodes: int, scatter, interpolate):
     """Density and energy of ``point`` with the gas particles of materials ``gas`` relaxed towards their
     nodes' common pressure (module docstring), their pressure read from ``point.stress``. ``mass`` is zero

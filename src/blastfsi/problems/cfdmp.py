@@ -309,7 +309,7 @@ def build(sc: CfdmpScenario) -> Setup:
                 gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape, mpm_cfl=sc.numerics.cfl,
                 q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
                 pic_fraction=[sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))],
-                pressure_relaxation=sc.numerics.pressure_relaxation and len(gas_material) > 1)
+                pressure_relaxation=sc.numerics.pressure_relaxation)
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
                  int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, gx, gvol, ghalf, gcell,
                  tuple(boundary_faces), outflow_area, info)
