@@ -22,7 +22,7 @@ from blastfsi import mpm, timeloop
 from blastfsi.cfdmp import coupling as cp
 from blastfsi.cfdmp.scenario import CfdmpScenario
 from blastfsi.diagnostics import blast_maps
-from blastfsi.euler.method import GEOMETRY_CODE, SCHEME_CODE
+from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
 from blastfsi.euler.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
@@ -121,14 +121,14 @@ class Cfdmp:
         return problem.build(sc)
 
     def static(self, setup: problem.Setup, sc: CfdmpScenario) -> Static:
-        return self._static(setup, SCHEME_CODE[sc.numerics.scheme])
+        return self._static(setup, SCHEME_CODE[sc.numerics.scheme], LIMITER_CODE[sc.numerics.limiter])
 
     @staticmethod
-    def _static(setup: problem.Setup, scheme: int) -> Static:
+    def _static(setup: problem.Setup, scheme: int, limiter: int = ek.VAN_LEER) -> Static:
         e = setup.euler
         cfg = ek.Config(shape=e.grid.shape, dx=float(e.grid.dx), geometry=GEOMETRY_CODE[e.grid.geometry], bc=e.bc,
                         scheme=scheme, n_materials=len(e.materials),
-                        origin=tuple(float(v) for v in e.grid.lower))
+                        origin=tuple(float(v) for v in e.grid.lower), limiter=limiter)
         n_struct = int(setup.info["structure_particles"])
         # the structures fill the first slots of the pool and are never deleted; the gas lives after them
         slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)

@@ -4,11 +4,11 @@ Schemes: 0 split Lax-Wendroff with adaptive viscosity (the paper's), 1 unsplit
 HLLC-MUSCL; one or two materials (five-equation products/air model, ERRATA
 000-9); Cartesian 1D/2D/3D, cylindrical (1D, 2D r-z) and spherical 1D.
 """
-from blastfsi.euler.config import (AXIS, CARTESIAN, CYLINDRICAL, HLLC_MUSCL, LAX_WENDROFF, OUTFLOW, PERIODIC,
-                                   SPHERICAL, WALL, Config, Params, n_vars)
+from blastfsi.euler.config import (AXIS, CARTESIAN, CYLINDRICAL, HLLC_MUSCL, LAX_WENDROFF, MC, MINMOD, OUTFLOW,
+                                   PERIODIC, SPHERICAL, VAN_LEER, WALL, Config, Params, n_vars)
 from blastfsi.euler.step import (conservative, first_bad_cell, primitives, stable_dt, step, step_with_transfers,
                                  total)
 
 __all__ = ["Config", "Params", "n_vars", "conservative", "primitives", "stable_dt", "first_bad_cell", "step",
            "step_with_transfers", "total", "CARTESIAN", "CYLINDRICAL", "SPHERICAL", "OUTFLOW", "WALL", "AXIS",
-           "PERIODIC", "LAX_WENDROFF", "HLLC_MUSCL"]
+           "PERIODIC", "LAX_WENDROFF", "HLLC_MUSCL", "VAN_LEER", "MINMOD", "MC"]

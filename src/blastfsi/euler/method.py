@@ -16,6 +16,7 @@ from blastfsi.method import Grid, register
 from blastfsi.problems import euler as problem
 
 SCHEME_CODE = {"lax-wendroff": kernels.LAX_WENDROFF, "hllc-muscl": kernels.HLLC_MUSCL}
+LIMITER_CODE = {"van-leer": kernels.VAN_LEER, "minmod": kernels.MINMOD, "mc": kernels.MC}
 GEOMETRY_CODE = {"cartesian": kernels.CARTESIAN, "cylindrical": kernels.CYLINDRICAL,
                  "spherical": kernels.SPHERICAL, "axisymmetric": kernels.CYLINDRICAL}
 
@@ -66,7 +67,8 @@ class Euler:
         return kernels.Config(shape=setup.grid.shape, dx=float(setup.grid.dx),
                               geometry=GEOMETRY_CODE[setup.grid.geometry], bc=setup.bc,
                               scheme=SCHEME_CODE[sc.numerics.scheme], n_materials=len(setup.materials),
-                              origin=tuple(float(v) for v in setup.grid.lower))
+                              origin=tuple(float(v) for v in setup.grid.lower),
+                              limiter=LIMITER_CODE[sc.numerics.limiter])
 
     def static(self, setup: problem.Setup, sc: EulerScenario) -> Static:
         flat = tuple(int(np.ravel_multi_index(c, setup.grid.shape)) for c in setup.gauge_cells)
@@ -168,6 +170,8 @@ class Euler:
         t = float(state.t)
         out = {"scheme": sc.numerics.scheme, "geometry": setup.grid.geometry, "materials": list(setup.materials),
                "dx": setup.grid.dx}
+        if sc.numerics.scheme == "hllc-muscl":
+            out["limiter"] = sc.numerics.limiter
         for q in ("mass", "energy"):
             first, last = hist[q][0], hist[q][-1]
             out[f"{q}_change_relative"] = float((last - first) / abs(first)) if first != 0 else None

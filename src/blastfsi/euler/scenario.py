@@ -135,6 +135,9 @@ class Grid(Strict):
 class Numerics(SharedNumerics):
     scheme: Literal["lax-wendroff", "hllc-muscl"] = "hllc-muscl"
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="Courant number of the full time step")
+    limiter: Literal["van-leer", "minmod", "mc"] = Field("van-leer", description=(
+        "slope limiter of hllc-muscl's reconstruction: van-leer (default), minmod (most diffusive) or mc "
+        "(monotonized central, the sharpest); ignored by lax-wendroff"))
 
 
 class EulerOutput(Output):

@@ -110,8 +110,8 @@ def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
     data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
                                   "time", "output"})
     euler_cfl = sc.numerics.euler_cfl or sc.numerics.cfl  # (euler_cfl > 0 when set)
-    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "cfl": euler_cfl,
-                                          "precision": sc.numerics.precision})
+    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "limiter": sc.numerics.limiter,
+                                          "cfl": euler_cfl, "precision": sc.numerics.precision})
     if sc.initial.kind == "charge" and sc.initial.remap_time is None:
         centre = np.asarray(sc.initial.center or [0.0] * sc.domain.ndim, float)
         nearest = np.clip(centre, sc.mpm_region.lower, sc.mpm_region.upper)
