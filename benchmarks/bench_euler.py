@@ -2,7 +2,7 @@
 
     python benchmarks/bench_euler.py --sizes 64 128 --schemes lax-wendroff hllc-muscl \
         --precision float64 float32 --out benchmarks/results_euler_cpu.json \
-        [--pyclaw FILE.npz [--grids-2d 560 800]] [--profile N] [--update]
+        [--pyclaw FILE.npz [--grids-2d 560 800] [--limiter mc]] [--profile N] [--update]
 
 3D rows: the whole step (blastfsi.euler.step) on an n^3 grid, ideal gas
 gamma = 1.4, one material, outflow on all faces, a spherical blast (p = 10
@@ -55,6 +55,7 @@ import time
 from pathlib import Path
 
 SCHEMES = {"lax-wendroff": 0, "hllc-muscl": 1}
+LIMITERS = {"van-leer": 0, "minmod": 1, "mc": 2}  # blastfsi.euler.VAN_LEER, MINMOD, MC
 FIELD_PASSES = {"lax-wendroff": 6 * (5 + 5), "hllc-muscl": 10 + 15}  # field reads+writes per 3D cell-step (docstring)
 H100_BANDWIDTH = 3.35e12  # B/s, NVIDIA H100 SXM5 HBM3 datasheet
 BLAST = dict(p_in=10.0, p_out=1.0, rho=1.0, radius=0.2, gamma=1.4)  # nondimensional blast, same as bench_pyclaw.py
@@ -74,12 +75,13 @@ def _jax_setup():
     return jax, jnp, np, euler, ideal_gas_params
 
 
-def _blast_state(shape, lower, upper, scheme, geometry, bc, cfl):
-    """Config, Params and U of the blast (cell-centre rule: p_in where the centre lies at r < radius)."""
+def _blast_state(shape, lower, upper, scheme, geometry, bc, cfl, limiter=0):
+    """Config, Params and U of the blast (cell-centre rule: p_in where the centre lies at r < radius);
+    limiter: euler.VAN_LEER (0), MINMOD or MC, for hllc-muscl."""
     jax, jnp, np, euler, ideal_gas_params = _jax_setup()
     dtype = np.float64 if jax.config.jax_enable_x64 else np.float32
     dx = (upper - lower) / shape[0]
-    cfg = euler.Config(tuple(shape), dx, geometry, bc, scheme, 1, (lower,) * len(shape))
+    cfg = euler.Config(tuple(shape), dx, geometry, bc, scheme, 1, (lower,) * len(shape), limiter)
     params = euler.Params(jnp.asarray([list(ideal_gas_params(BLAST["gamma"]))], dtype), jnp.asarray(cfl, dtype))
     axes = [lower + (np.arange(m) + 0.5) * dx for m in shape]
     r = np.sqrt(sum(c ** 2 for c in np.meshgrid(*axes, indexing="ij")))
@@ -172,9 +174,9 @@ def _run_to(U, t_end, params, cfg):
     return jax.lax.while_loop(lambda c: c[1] < t_end, body, (U, jnp.zeros((), U.dtype), jnp.zeros((), jnp.int32)))
 
 
-def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats):
+def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats, limiter=0):
     jax, jnp, np, euler, _ = _jax_setup()
-    cfg, params, U, axes = _blast_state(shape, lower, upper, scheme, geometry, bc, cfl)
+    cfg, params, U, axes = _blast_state(shape, lower, upper, scheme, geometry, bc, cfl, limiter)
     t0 = time.perf_counter()
     compiled = jax.jit(_run_to, static_argnums=3).lower(U, jnp.asarray(t_end, U.dtype), params, cfg).compile()
     compile_s = time.perf_counter() - t0
@@ -186,9 +188,9 @@ def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats):
             "compile_s": compile_s}
 
 
-def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids):
-    """Our 2D blast (both schemes; PyClaw's grid, then extra_grids) and PyClaw's against a 1D cylindrical
-    reference (module docstring)."""
+def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-leer"):
+    """Our 2D blast (both schemes, hllc-muscl with ``limiter``; PyClaw's grid, then extra_grids) and PyClaw's
+    against a 1D cylindrical reference (module docstring)."""
     _, _, np, euler, _ = _jax_setup()
     claw = np.load(pyclaw_npz)
     n_claw = int(claw["density"].shape[0])
@@ -204,9 +206,10 @@ def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids):
     for n in [n_claw] + list(extra_grids):
         for scheme, code in SCHEMES.items():
             s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, cfl, T_END_2D,
-                       repeats)
+                       repeats, LIMITERS[limiter])
             xc, yc = np.meshgrid(*s["axes"], indexing="ij")
-            rows.append({"code": f"blastfsi {scheme}", "grid": n, "cfl": cfl, "steps": s["steps"], "t_end": s["t"],
+            name = f"blastfsi {scheme}" + (f" {limiter}" if code == euler.HLLC_MUSCL else "")
+            rows.append({"code": name, "grid": n, "cfl": cfl, "steps": s["steps"], "t_end": s["t"],
                          "wall_s": s["wall_s"], "walls_s": s["walls_s"], "compile_s": s["compile_s"],
                          "cell_steps_per_s": n * n * s["steps"] / s["wall_s"],
                          "l1_density": l1(s["rho"], xc, yc, ref)})
@@ -310,7 +313,8 @@ def worker(task):
     if task["kind"] == "3d":
         return bench_3d(task["n"], task["scheme"], task["repeats"], task["min_time"], task["max_steps"])
     if task["kind"] == "compare2d":
-        return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"], task["extra_grids"])
+        return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"], task["extra_grids"],
+                          task["limiter"])
     if task["kind"] == "profile":
         return profile(task["n"])
     raise ValueError(f"unknown worker task kind {task['kind']!r}")
@@ -373,7 +377,7 @@ def section_pyclaw(args):
         subprocess.run([args.pyclaw_python, str(HERE / "bench_pyclaw.py"), "--cells", str(args.pyclaw_cells),
                         "--out", args.pyclaw], check=True)
     cmp = spawn({"kind": "compare2d", "npz": args.pyclaw, "cfl": args.cfl, "ref_cells": args.ref_cells,
-                 "repeats": args.repeats_2d, "extra_grids": args.grids_2d})
+                 "repeats": args.repeats_2d, "extra_grids": args.grids_2d, "limiter": args.limiter})
     print(f"2D blast {cmp['grid']}, t = {cmp['t_end']}; reference {cmp['reference']['cells']} cells "
           f"(L1 vs half resolution {cmp['reference']['l1_vs_half_resolution_reference']:.2e})")
     for r in cmp["rows"]:
@@ -415,6 +419,8 @@ def main():
     ap.add_argument("--pyclaw-cells", type=int, default=400)
     ap.add_argument("--cfl", type=float, default=0.5, help="Courant number of the 2D comparison (scenario default)")
     ap.add_argument("--ref-cells", type=int, default=20000)
+    ap.add_argument("--limiter", choices=sorted(LIMITERS), default="van-leer",
+                    help="hllc-muscl limiter of the 2D comparison")
     ap.add_argument("--grids-2d", type=int, nargs="*", default=[], help="further grids for our 2D solves")
     ap.add_argument("--repeats-2d", type=int, default=2, help="timed runs of each 2D comparison solve")
     ap.add_argument("--profile", type=int, default=None, metavar="N", help="per-kernel profile at N^3 (float64)")
