@@ -13,7 +13,7 @@ from typing import Literal, Optional
 
 from pydantic import Field, model_validator
 
-from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial
+from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial, Limiter
 from blastfsi.mpm.scenario import Body, MPMNumerics
 from blastfsi.scenario import ScenarioBase, Strict
 
@@ -56,7 +56,7 @@ class CfdmpNumerics(MPMNumerics):
     the Eulerian scheme's."""
 
     scheme: Literal["lax-wendroff", "hllc-muscl"] = Field("hllc-muscl", description="Eulerian scheme")
-    limiter: Literal["van-leer", "minmod", "mc"] = Field("van-leer", description=(
+    limiter: Limiter = Field("van-leer", description=(
         "slope limiter of the Eulerian hllc-muscl scheme (see the euler method's numerics.limiter)"))
     cfl: float = Field(0.4, gt=0.0, le=1.0, description=(
         "Courant number of the MPM step, and of the Eulerian one unless euler_cfl is set (one common step: the "

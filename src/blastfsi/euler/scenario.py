@@ -22,6 +22,7 @@ from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, gauge_points
 
 Vector = Union[float, list[float]]
 AXES = ("x", "y", "z")
+Limiter = Literal["van-leer", "minmod", "mc"]  # numerics.limiter of hllc-muscl (euler and cfdmp methods)
 BOUNDARY_KINDS = ("outflow", "wall", "symmetry", "axis", "periodic")
 
 
@@ -135,7 +136,7 @@ class Grid(Strict):
 class Numerics(SharedNumerics):
     scheme: Literal["lax-wendroff", "hllc-muscl"] = "hllc-muscl"
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="Courant number of the full time step")
-    limiter: Literal["van-leer", "minmod", "mc"] = Field("van-leer", description=(
+    limiter: Limiter = Field("van-leer", description=(
         "slope limiter of hllc-muscl's reconstruction: van-leer (default), minmod (most diffusive) or mc "
         "(monotonized central, the sharpest); ignored by lax-wendroff"))
 
