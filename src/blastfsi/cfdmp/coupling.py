@@ -1,9 +1,13 @@
 """Kernels of the bridge-region coupling (seed 000 Sec. 3), pure and jittable.
 
 Notation: the Eulerian state ``U`` (rows of :mod:`blastfsi.euler.config`) covers
-the whole domain; the MPM box holds particles (gas and structures); ``V = dx^ndim``
-is the cell measure (per unit depth in 2D, per unit area in 1D, like the
-particle masses). One coupled step (000 Sec. 3.5, the 14 steps regrouped):
+the whole domain; the MPM box holds particles (gas and structures); ``V`` is a
+cell's volume in the units of the particle masses: dx^ndim on Cartesian grids
+(per unit depth in 2D, per unit area in 1D), the ring 2 pi r dx^2 on an r-z grid
+(``Layout.cell_volume``, :func:`blastfsi.euler.geometry.cell_volumes`), and a
+face transfer T moves T times its face's ``measure`` (dx times the face area,
+:func:`blastfsi.euler.geometry.face_measures`). One coupled step (000 Sec. 3.5,
+the 14 steps regrouped):
 
 1. :func:`fictitious`: the box cells beyond the bridge take their values
    from the gas particles (000 Eqs. 31-36): nodal sums of mass (per
@@ -15,7 +19,9 @@ particle masses). One coupled step (000 Sec. 3.5, the 14 steps regrouped):
    parked at their initial state.
 2. :func:`interface_source`: the Eulerian cells of the ring outside the box act
    as particles on the interface nodes (000 Eqs. 37-39): mass rho V, momentum
-   rho V u, and internal force + grad N_I p V (their stress is -p I).
+   rho V u, and internal force + grad N_I p V (their stress is -p I; on an r-z
+   grid also the hoop term + N_I p V / r on the radial component, as the MPM
+   particles' own, so that a uniform pressure still balances exactly).
 3. The MPM step with that source and the Eulerian step with its face transfers
    (``euler.step_with_transfers``), both over the same dt.
 4. Transport (000 Sec. 3.4), written so that mass is conserved exactly:
@@ -75,10 +81,14 @@ class Layout(NamedTuple):
     ring_idx: jnp.ndarray  # (S, R) MPM node indices of their stencils
     ring_w: jnp.ndarray  # (S, R) N_Ic
     ring_grad: jnp.ndarray  # (ndim, S, R) dN_Ic/dx
+    ring_volume: jnp.ndarray  # (R,) their volumes V_c
+    ring_radius: jnp.ndarray  # (R,) their centres' first coordinate (the radius on an r-z grid)
+    cell_volume: jnp.ndarray  # (N,) volume of every Eulerian cell (C order)
     outflow_area: jnp.ndarray  # (num_nodes, ndim) -n A on MPM nodes of box faces on outflow domain faces, else 0
     face_out: jnp.ndarray  # (F,) flat Eulerian index of the cell outside each face cell
     face_in: jnp.ndarray  # (F,) flat Eulerian index of the bridge cell
     face_centre: jnp.ndarray  # (F, 3) centre of each face cell's face [m]
+    face_measure: jnp.ndarray  # (F,) dx times its area: a transfer T through it moves T * face_measure
     face_into: jnp.ndarray  # (F,) +1 (lower box face) / -1 (upper)
     face_axis: jnp.ndarray  # (F, 3) unit normal into the box
     face_lateral: jnp.ndarray  # (F, 3, 3) rows: unit vectors along the face (zero rows beyond ndim - 1)
@@ -86,7 +96,8 @@ class Layout(NamedTuple):
     gas_volume: jnp.ndarray  # (G,)
     gas_half: jnp.ndarray  # (G, 3)
     gas_cell: jnp.ndarray  # (G,)
-    boundary_mask: tuple  # per axis (lower, upper) bool arrays over the domain-face cells (Eulerian-only)
+    boundary_measure: tuple  # per axis (lower, upper) arrays over the domain faces: their face_measure where
+    #                          the cell inside is Eulerian-only, else 0
     box_lower: jnp.ndarray  # (3,) [m]
     box_upper: jnp.ndarray  # (3,)
 
@@ -123,11 +134,6 @@ class Budget(NamedTuple):
     required: jnp.ndarray  # () int32: active particles an emission needed (> capacity: the run stops)
     structure_out: jnp.ndarray  # () mass of structure particles that left the box (their momentum and energy
     #                             are in boundary_out; structure mass is not part of the gas budget's rows)
-
-
-def cell_measure(cfg: ek.Config) -> float:
-    """V = dx^ndim: the Cartesian cell measure in the units of the particle masses."""
-    return float(cfg.dx ** len(cfg.shape))
 
 
 def flat_primitives(U, eos, cfg: ek.Config) -> dict:
@@ -281,7 +287,7 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static):
     source as a function of the particles and their stencil, which the MUSL step calls with its own."""
     grid = static.mpm.grid
     d = grid.dim
-    V = cell_measure(static.euler)
+    V = layout.ring_volume
     rho = prim_flat["rho"][layout.ring_cells]
     vel = prim_flat["velocity"][:, layout.ring_cells]
     p = prim_flat["pressure"][layout.ring_cells]
@@ -293,7 +299,10 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static):
     w = layout.ring_w
     mass = scatter(w * (rho * V))
     mom = jnp.stack([scatter(w * (rho * V * vel[i])) for i in range(d)], axis=1)
-    force = jnp.stack([scatter(layout.ring_grad[i] * (p * V)) for i in range(d)], axis=1)
+    force = [scatter(layout.ring_grad[i] * (p * V)) for i in range(d)]
+    if grid.axisymmetric:  # the hoop stress -p of the ring cells, as in the particles' r-momentum (mpm.musl)
+        force[0] = force[0] + scatter(w * (p * V / layout.ring_radius))
+    force = jnp.stack(force, axis=1)
     def source(P: mpm.Particles, idx, w) -> mpm.musl.NodalSource:
         ghost = outflow_ghost(P, layout, static, (idx, w))
         return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force)
@@ -333,19 +342,20 @@ def trusted_phases(prim_flat: dict, cells, eos, n: int):
     return rho_k, e_k
 
 
-def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, V):
+def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, volume):
     """Add per-entry content (mass per material (n, E), momentum (d, E), energy (E,), phase volume (n, E)) to the
-    Eulerian cells ``cells`` (E,) (000 Eqs. 49-51); the products fraction becomes the volume-weighted mean of the
-    cell's and the added gas (a scatter, entries may share a cell)."""
+    Eulerian cells ``cells`` (E,) (000 Eqs. 49-51) of volumes ``volume`` (N,); the products fraction becomes the
+    volume-weighted mean of the cell's and the added gas (a scatter, entries may share a cell)."""
     flat = U.reshape(U.shape[0], -1)
     n, d = lay.n, lay.ndim
+    V = volume[cells]
     new = [flat[k].at[cells].add(mass_k[k] / V) for k in range(n)]
     new += [flat[lay.mom + i].at[cells].add(momentum[i] / V) for i in range(d)]
     new += [flat[lay.energy].at[cells].add(energy / V)]
     if n == 2:
         added = jnp.zeros_like(flat[0]).at[cells].add(volume_k[0] + volume_k[1])
         added_p = jnp.zeros_like(flat[0]).at[cells].add(volume_k[0])
-        new += [(flat[lay.alpha] * V + added_p) / (V + added)]
+        new += [(flat[lay.alpha] * volume + added_p) / (volume + added)]
     return jnp.stack(new).reshape(U.shape)
 
 
@@ -357,8 +367,7 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     cfg = static.euler
     n, d = cfg.n_materials, len(cfg.shape)
     lay = row_layout(cfg)
-    V = cell_measure(cfg)
-    tf = face_transfers(T, static) * (layout.face_into * V)  # content into the box
+    tf = face_transfers(T, static) * (layout.face_into * layout.face_measure)  # content into the box
     m_k = tf[:n]  # (n, F)
     inflow = jnp.sum(m_k, axis=0) > 0.0
     donor = jnp.where(inflow, layout.face_out, layout.face_in)
@@ -373,14 +382,14 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     u3 = jnp.zeros((3,) + u.shape[1:], u.dtype).at[:d].set(u)
     res = res._replace(mass=res.mass + m_k.T, momentum=res.momentum + (m_k[:, None, :] * u3[None]).transpose(2, 0, 1),
                        energy=res.energy + carried_e.T)
-    U, res = _settle(U, res, ~inflow, rho_k, lay, layout, V)  # (outflow faces: the donor is the bridge cell)
+    U, res = _settle(U, res, ~inflow, rho_k, lay, layout)  # (outflow faces: the donor is the bridge cell)
     return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
 
 
 SETTLE_FRACTIONS = (1.0, 0.5, 0.25, 0.125)  # shares of an outflow reservoir's balance tried, largest first
 
 
-def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout, V):
+def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout):
     """Move the balance of the outflow faces' reservoirs (debt of the scheme's convective transfer plus the
     deleted particles' content) into the Eulerian cells outside those faces; ``rho_k`` the phase densities of
     the donor (bridge) cells, for the volume the settled products take.
@@ -394,6 +403,7 @@ def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout, V):
     flat = U.reshape(U.shape[0], -1)
     n, d = lay.n, lay.ndim
     cells = layout.face_out
+    V = layout.cell_volume[cells]
     mass = jnp.sum(res.mass, axis=1)  # (F,)
     mom = jnp.sum(res.momentum, axis=1)[:, :d]  # (F, d)
     energy = jnp.sum(res.energy, axis=1)
@@ -408,7 +418,7 @@ def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout, V):
     share = jnp.zeros_like(mass)
     for f in SETTLE_FRACTIONS[::-1]:  # the largest acceptable share wins
         rho = rho0 + f * mass / V
-        ok = (rho >= 0.5 * rho0) & (internal(rho, mom0 + f * mom / V, e0 + f * energy / V) >= 0.5 * i0)
+        ok = (rho >= 0.5 * rho0) & (internal(rho, mom0 + f * mom / V[:, None], e0 + f * energy / V) >= 0.5 * i0)
         share = jnp.where(ok, f, share)
     share = jnp.where(outflow, share, 0.0)
     moved_m = share[:, None] * res.mass  # (F, n)
@@ -416,7 +426,7 @@ def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout, V):
     moved_e = share[:, None] * res.energy
     vol_k = jnp.stack([jnp.where(moved_m[:, k] != 0.0, moved_m[:, k] / rho_k[k], 0.0) for k in range(n)])
     U = _add_to_cells(U, cells, moved_m.T, jnp.sum(moved_p, axis=1)[:, :d].T, jnp.sum(moved_e, axis=1), vol_k,
-                      lay, V)
+                      lay, layout.cell_volume)
     return U, res._replace(mass=res.mass - moved_m, momentum=res.momentum - moved_p, energy=res.energy - moved_e)
 
 
@@ -430,10 +440,10 @@ def boundary_outflow(T, static: Static, layout: Layout):
     for axis in range(d):
         t = T[axis][jnp.asarray(rows)]
         lo, hi = jnp.take(t, 0, axis=1 + axis), jnp.take(t, cfg.shape[axis], axis=1 + axis)
-        m_lo, m_hi = layout.boundary_mask[axis]
+        a_lo, a_hi = layout.boundary_measure[axis]
         red = tuple(range(1, lo.ndim))
-        out = out + jnp.sum(jnp.where(m_hi, hi, 0.0), axis=red) - jnp.sum(jnp.where(m_lo, lo, 0.0), axis=red)
-    return out * cell_measure(cfg)
+        out = out + jnp.sum(hi * a_hi, axis=red) - jnp.sum(lo * a_lo, axis=red)
+    return out
 
 
 def particle_content(P: mpm.Particles):
@@ -493,7 +503,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     """Move the reservoirs' content into the inflow particles (module docstring, Eqs. 45-48).
 
     Each face cell and material has one *inflow particle* that represents the gas entered through it since
-    the last release: the layer next to the face, of thickness m / (rho h^(ndim-1)), spanning the face cell
+    the last release: the layer next to the face, of thickness m / (rho A) (A the face's area), spanning the face cell
     (GIMP half-sizes: half the thickness normal to the face, h/2 along it), with the bridge cell's phase
     density, the mass-weighted velocity and the internal energy left by the total energy (Eq. 48
     generalised: e = E/m - |v|^2/2), stress -p I from its EOS. It is released to move with the MPM solution
@@ -516,7 +526,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     # a material feeds its inflow particle once the reservoir holds a meaningful share of a gas particle's
     # mass and the bridge cell holds enough of it for its phase density to mean something (numerical
     # diffusion leaves traces down to ~1e-200 kg, whose phase density is noise); traces wait in the reservoir
-    m_gas = prim_flat["rho"][layout.face_in] * h ** d / ppc ** d
+    m_gas = prim_flat["rho"][layout.face_in] * layout.face_measure / ppc ** d
     present = jnp.stack([prim_flat["mass_fraction"][k][layout.face_in] for k in range(n)], axis=1) >= PRESENT
     fed = (res.mass >= FEED_FRACTION * m_gas[:, None]) & present & (rho > 0.0) & jnp.isfinite(rho)
     fed = fed | (has & (res.mass > 0.0) & (rho > 0.0))
@@ -526,7 +536,8 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     e = ((m_old * (e_old + 0.5 * jnp.sum(v_old * v_old, axis=-1)) + jnp.where(fed, res.energy, 0.0)) / safe
          - 0.5 * jnp.sum(v * v, axis=-1))
     e = jnp.maximum(e, 0.0)
-    thick = jnp.clip(m / (rho * h ** (d - 1)), 0.0, h)
+    area = (layout.face_measure / h)[:, None]  # (h^(ndim-1) on Cartesian grids, the ring's 2 pi r h on r-z ones)
+    thick = jnp.clip(m / (rho * area), 0.0, h)
     x = layout.face_centre[:, None, :] + layout.face_axis[:, None, :] * (0.5 * thick)[..., None]
     half = jnp.abs(layout.face_axis)[:, None, :] * (0.5 * thick)[..., None]
     half = half + jnp.sum(jnp.abs(layout.face_lateral), axis=1)[:, None, :] * (0.5 * h)

@@ -96,10 +96,10 @@ def system_totals(U, P: mpm.Particles, res: cp.Reservoirs, layout: cp.Layout, st
     cfg = static.euler
     n, d = cfg.n_materials, len(cfg.shape)
     lay = ek.config.layout(cfg)
-    V = cp.cell_measure(cfg)
     axes = tuple(range(1, U.ndim))
     rows = jnp.concatenate([U[:n], U[lay.mom:lay.mom + d], U[lay.energy:lay.energy + 1]])
-    euler = jnp.sum(jnp.where(layout.outside, rows, 0.0), axis=axes) * V
+    V = layout.cell_volume.reshape(cfg.shape)
+    euler = jnp.sum(jnp.where(layout.outside, rows * V, 0.0), axis=axes)
     mass, mom, energy = cp.particle_content(P)
     slot = cp._gas_index(static, P.material)
     on = P.active
@@ -154,10 +154,9 @@ class Cfdmp:
         mp = mpm.make_params(setup.model_params, cfl=info["mpm_cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
                              pic_fraction=info["pic_fraction"], dtype=dtype)
         shape = mpm.SHAPES[info["shape_functions"]]
-        half = np.zeros((setup.ring_cells.size, 3))
-        half[:, :nd] = 0.5 * grid.cell_size
         if setup.ring_cells.size:
-            ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(half, dtype), grid, shape)
+            ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(setup.ring_half, dtype), grid,
+                                          shape)
         else:  # MPM everywhere: no ring
             S = shape.nodes_per_dim ** nd
             ridx, rw, rgrad = jnp.zeros((S, 0), jnp.int32), jnp.zeros((S, 0), dtype), [jnp.zeros((S, 0), dtype)] * nd
@@ -180,15 +179,18 @@ class Cfdmp:
             fictitious=jnp.asarray(setup.fictitious), parked=jnp.asarray(setup.parked),
             outside=jnp.asarray(setup.outside), park_rows=U0,
             ring_cells=jnp.asarray(setup.ring_cells, jnp.int32), ring_idx=ridx, ring_w=rw, ring_grad=jnp.stack(rgrad),
+            ring_volume=jnp.asarray(setup.ring_volume, dtype), ring_radius=jnp.asarray(setup.ring_x[:, 0], dtype),
+            cell_volume=jnp.asarray(setup.cell_volume, dtype),
             outflow_area=jnp.asarray(setup.outflow_area, dtype),
             face_out=jnp.asarray(cat([f.outside for f in setup.faces], ()), jnp.int32),
             face_in=jnp.asarray(cat([f.bridge for f in setup.faces], ()), jnp.int32),
             face_centre=jnp.asarray(_pad3(cat([f.centre for f in setup.faces], (nd,))), dtype),
+            face_measure=jnp.asarray(cat([f.measure for f in setup.faces], ()), dtype),
             face_into=jnp.asarray(cat([np.full(f.outside.size, f.into_box) for f in setup.faces], ()), dtype),
             face_axis=jnp.asarray(axis_vec, dtype), face_lateral=jnp.asarray(cat(lateral, (3, 3)), dtype),
             gas_x=jnp.asarray(setup.gas_x, dtype), gas_volume=jnp.asarray(setup.gas_volume, dtype),
             gas_half=jnp.asarray(setup.gas_half, dtype), gas_cell=jnp.asarray(setup.gas_cell, jnp.int32),
-            boundary_mask=tuple(tuple(jnp.asarray(m) for m in pair) for pair in setup.boundary_faces),
+            boundary_measure=tuple(tuple(jnp.asarray(m, dtype) for m in pair) for pair in setup.boundary_measure),
             box_lower=jnp.asarray(box_lo, dtype), box_upper=jnp.asarray(box_hi, dtype))
         x0 = np.zeros((0, 3)) if setup.structures is None else np.asarray(setup.structures.x)
         return Params(kp, _cast(mp, dtype), layout, jnp.asarray(e.reference_pressure, dtype),
@@ -198,7 +200,8 @@ class Cfdmp:
     @staticmethod
     def _initial_rows(setup: problem.Setup, kp: ek.Params, dtype):
         e = setup.euler
-        cfg = ek.Config(e.grid.shape, float(e.grid.dx), 0, e.bc, 1, len(e.materials), tuple(e.grid.lower))
+        cfg = ek.Config(e.grid.shape, float(e.grid.dx), GEOMETRY_CODE[e.grid.geometry], e.bc, 1, len(e.materials),
+                        tuple(e.grid.lower))
         return ek.conservative(jnp.asarray(e.rho_k, dtype), jnp.asarray(e.alpha[0], dtype),
                                jnp.asarray(e.velocity, dtype), jnp.asarray(e.pressure, dtype), kp, cfg)
 
@@ -320,7 +323,8 @@ class Cfdmp:
 
     def history_columns(self, setup: problem.Setup, sc: CfdmpScenario) -> tuple:
         nd = setup.euler.grid.ndim
-        kg, J, mom = ("kg", "J", "kg*m/s") if nd == 3 else (("kg/m", "J/m", "kg*m/s/m") if nd == 2 else
+        full = nd == 3 or setup.grid.axisymmetric  # (r-z: the rings' whole content)
+        kg, J, mom = ("kg", "J", "kg*m/s") if full else (("kg/m", "J/m", "kg*m/s/m") if nd == 2 else
                                                             ("kg/m^2", "J/m^2", "kg*m/s/m^2"))
         cols = [("time", "s"), ("coupled", "1"), ("particles", "1"), ("mass_euler", kg), ("mass_gas_particles", kg),
                 ("mass_structures", kg), ("mass_reservoirs", kg), ("mass_boundary_out", kg),

@@ -2,7 +2,8 @@
 
 The whole domain is the Eulerian grid of the ``euler`` method (same ``domain``,
 ``boundaries``, ``grid``, ``initial`` and ``materials`` keys); ``[mpm_region]``
-is an axis-aligned box of whole cells inside it where the gas becomes
+is an axis-aligned box of whole cells inside it (on an r-z grid, ``domain.geometry =
+"axisymmetric"``, a ring or, touching the axis, a cylinder) where the gas becomes
 particles and ``[[structures]]`` (the ``mpm`` method's bodies) stand. Every face
 of the box that is not on the domain boundary borders the Eulerian region and
 carries a bridge ``bridge_cells`` wide inside the box (000 Sec. 3.1).
@@ -91,9 +92,9 @@ class CfdmpScenario(ScenarioBase):
     def _consistent(self):
         d, box = self.domain, self.mpm_region
         nd = d.ndim
-        if d.geometry != "cartesian":
-            raise ValueError(f"domain.geometry: cfdmp runs on Cartesian grids (1D, 2D plane strain, 3D), got "
-                             f"{d.geometry!r}")
+        if d.geometry not in ("cartesian", "axisymmetric"):
+            raise ValueError(f"domain.geometry: cfdmp runs on Cartesian grids (1D, 2D plane strain, 3D) and 2D "
+                             f"axisymmetric (r-z) ones, got {d.geometry!r}")
         if len(box.lower) != nd:
             raise ValueError(f"mpm_region.lower: expected {nd} coordinate(s), got {len(box.lower)}")
         for ax, lo, hi, dlo, dhi in zip(AXES, box.lower, box.upper, d.lower, d.upper):

@@ -64,3 +64,19 @@ def cell_volumes(cfg: Config, dtype):
     r = _faces(cfg, 0, cfg.shape[0])
     shell = (2.0 * np.pi if j == 1 else 4.0 * np.pi) * np.diff(r ** (j + 1)) / (j + 1)
     return _along_axis0(shell * cfg.dx ** (nd - 1), nd, dtype)
+
+
+def face_measures(cfg: Config, axis: int, dtype):
+    """dx times the area of every face of ``axis`` [m^ndim], broadcastable to the faces' shape (cfg.shape
+    with shape[axis] + 1): the physical content a face transfer T of ``euler.step_with_transfers`` moves
+    is T times this. dx^ndim (Cartesian); radial faces 2 pi r_f dx^ndim (cylindrical: per unit length in
+    1D, rings in r-z) or 4 pi r_f^2 dx (spherical); axial faces of an r-z grid pi (r+^2 - r-^2) dx, the
+    volume of the cell column they bound (V_i g+-_i = A_{i+-1/2} dx, as in :func:`flux_factors`)."""
+    nd = len(cfg.shape)
+    if cfg.geometry == CARTESIAN:
+        return np.asarray(cfg.dx ** nd, dtype=dtype)
+    if axis != 0:
+        return cell_volumes(cfg, dtype)
+    r = _faces(cfg, 0, cfg.shape[0])
+    area = 2.0 * np.pi * r * cfg.dx ** (nd - 1) if cfg.geometry == 1 else 4.0 * np.pi * r ** 2
+    return _along_axis0(area * cfg.dx, nd, dtype)
