@@ -300,14 +300,10 @@ def build(sc: CfdmpScenario) -> Setup:
         ring_x[:, ax] = g.lower[ax] + (i + 0.5) * dx
     ring_half = np.zeros_like(ring_x)
     ring_half[:, :nd] = 0.5 * dx
-    if axisymmetric:
-        s = dx / ppc
-        sub = np.stack(np.meshgrid(*[(np.arange(ppc) + 0.5) * s - 0.5 * dx] * 2, indexing="ij"), axis=-1).reshape(-1, 2)
-        ring_x = (ring_x[:, None, :2] + sub[None]).reshape(-1, 2)
-        ring_x = np.pad(ring_x, ((0, 0), (0, 1)))
+    if axisymmetric:  # (mpm.lattice of each ring cell: positions, ring volumes 2 pi r s^2, half-sizes s/2)
+        points = [mpm.lattice(grid, x[:2] - 0.5 * dx, x[:2] + 0.5 * dx, ppc) for x in ring_x]
+        ring_x, ring_volume, ring_half = (np.concatenate(parts) for parts in zip(*points))
         ring_cells = np.repeat(ring_cells, ppc ** 2)
-        ring_half = np.pad(np.full((ring_cells.size, 2), 0.5 * s), ((0, 0), (0, 1)))
-        ring_volume = 2.0 * np.pi * ring_x[:, 0] * s ** 2
     else:
         ring_volume = cell_volume[ring_cells]
 
