@@ -71,6 +71,7 @@ def test_shock_crosses_the_mpm_region(shock):
     assert abs(front - shock_x) < 3 * dx
 
 
+@pytest.mark.slow  # default-suite time (< 10 min on 2 cores)
 def test_strong_shock_leaves_the_mpm_region():
     """A 500:1 shock (13 MPa, like the he-slab-2d blast at its gauges) crosses the box and leaves it into the
     Eulerian region. Settling each step's outflow debt at once emptied the first Eulerian cell past the
@@ -91,6 +92,7 @@ def test_strong_shock_leaves_the_mpm_region():
     assert np.all(f["density"] > 0.5 * R[0])
 
 
+@pytest.mark.slow  # default-suite time (< 10 min on 2 cores)
 def test_a_full_pool_grows_and_a_fixed_one_stops_the_run(shock):
     """The default pool (structures + 1.25 x the box's gas particles) fills as the shock compresses the box's
     gas and the bridge creates particles: the loop stops while the pool still has room for one step's

@@ -165,6 +165,12 @@ def test_solver_rejects_bad_input():
         mpm.lattice(grid, (1.0,), (1.1,), 2)
     with pytest.raises(mpm.ParticleError, match="leaves the grid"):
         mpm.lattice(grid, (1.0,), (5.0,), 2)
+    with pytest.raises(mpm.ParticleError, match="leaves the grid"):
+        mpm.lattice(grid, (grid.origin[0] - 0.01 * grid.cell_size,), (1.0,), 2)
+    # a box whose edges are cell edges computed in floating point (x_c - h/2) is inside: the grid
+    # origin 0.02 - 0.002 is 0.018000000000000002 > 0.018 (a coupled r-z run's ring cells hit this)
+    edge = mpm.Grid(origin=(0.02 - 0.002,), cell_size=0.002, cells=(10,))
+    assert len(mpm.lattice(edge, (0.018,), (0.02,), 2)[0]) == 2
     with pytest.raises(mpm.ParticleError, match="capacity"):
         mpm.empty(0)
     with pytest.raises(mpm.ParticleError, match="volume"):

@@ -210,6 +210,7 @@ def plane_charge(**initial):
             "time": {"end": 1e-5}, "output": {"history_samples": 5, "fields": 0, "plots": False}}
 
 
+@pytest.mark.slow  # default-suite time (< 10 min on 2 cores)
 def test_cylindrical_charge_runs_on_a_plane_grid_and_conserves():
     import blastfsi
     from blastfsi.materials.gases import GASES

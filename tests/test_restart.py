@@ -4,12 +4,14 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 import tomli_w
 
 from blastfsi.io.results import read_history
 from conftest import uniform_data
 
 
+@pytest.mark.slow  # default-suite time (< 10 min on 2 cores)
 def test_restart_is_bit_for_bit(tmp_path):
     data = uniform_data(grid__cells=200, output__checkpoint_interval=0.0007, output__fields=4)
     scenario = tmp_path / "s.toml"

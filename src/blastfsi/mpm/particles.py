@@ -172,7 +172,8 @@ def lattice(grid, lower, upper, per_cell: int = 2):
     counts = np.rint((upper - lower) / s).astype(int)
     if np.any(counts < 1):
         raise ParticleError(f"upper - lower = {upper - lower}: the box is smaller than one particle spacing {s}")
-    if np.any(lower < np.asarray(grid.origin)) or np.any(upper > np.asarray(grid.upper) + 1e-12 * grid.cell_size):
+    slack = 1e-12 * grid.cell_size  # round-off of boxes given as cell edges (x_c -+ h/2)
+    if np.any(lower < np.asarray(grid.origin) - slack) or np.any(upper > np.asarray(grid.upper) + slack):
         raise ParticleError(f"lower/upper: the box [{lower}, {upper}] leaves the grid [{grid.origin}, {grid.upper}]")
     axes = [lo + s * (np.arange(c) + 0.5) for lo, c in zip(lower, counts)]
     pos = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, grid.dim)
