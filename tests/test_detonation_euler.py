@@ -44,6 +44,8 @@ def test_charge_remapped_into_euler_conserves_and_runs():
 def test_bad_charge_initial_is_rejected():
     with pytest.raises(ScenarioError, match="initial.mass"):
         parse(euler_charge(mass=-1.0))
+    with pytest.raises(ScenarioError, match="initial.air_ratio"):
+        parse(euler_charge(air_ratio=0.5))  # 1D air zones narrower than the charge zones
     with pytest.raises(ScenarioError, match="unknown explosive"):
         blastfsi.run(euler_charge(explosive="c4"))
     with pytest.raises(ScenarioError, match="left the 1D domain|crosses"):

@@ -156,7 +156,7 @@ def test_cylinder_remapped_from_lagrangian1d_matches_the_1d_solution():
 
     air, hx = GASES["air"], GASES["tnt"]
     rho0, p0, gamma = air.density, air.pressure, air.gamma
-    res = run_1d("tnt", 0.05, 100, 1.0, 3e-5, {"gamma": gamma, "pressure": p0, "density": rho0}, j=1)
+    res = run_1d("tnt", 0.05, 100, 100.0, 1.0, 3e-5, {"gamma": gamma, "pressure": p0, "density": rho0}, j=1)
     st = {k: np.asarray(v)[0] for k, v in res.state._asdict().items()}
     nz = res.setups[0].explosive_zones
     prof = rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], nz, 1)

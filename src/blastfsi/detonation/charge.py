@@ -108,14 +108,16 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
     return r_lim
 
 
-def run_1d(explosive: str, radius: float, cells: int, length: float, t_end: float, gas: dict,
+def run_1d(explosive: str, radius: float, cells: int, air_ratio: float, length: float, t_end: float, gas: dict,
            gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2):
     """The 1D spherical (j = 2) or cylindrical (j = 1) detonation on ``lagrangian1d`` to ``t_end``
-    (a :class:`blastfsi.simulation.Result`)."""
+    (a :class:`blastfsi.simulation.Result`): ``cells`` zones across the charge radius, then uniform air
+    zones ``air_ratio`` times as wide."""
     from blastfsi import simulation
 
     data = {"method": "lagrangian1d", "name": "charge-1d", "charge": {"explosive": explosive, "radius": radius},
-            "domain": {"geometry": GEOMETRY_1D[j], "length": length}, "grid": {"cells": cells},
+            "domain": {"geometry": GEOMETRY_1D[j], "length": length},
+            "grid": {"cells": cells, "first_ratio": air_ratio, "max_ratio": air_ratio},
             "gas": gas, "time": {"end": t_end},
             "output": {"history_samples": 2, "fields": 0, "plots": False, "gauges": gauges or [],
                        "arrival_fraction": arrival_fraction}}
@@ -149,8 +151,8 @@ def charge_initial(sc, g) -> ChargeFields:
     length = 1.5 * r_lim + 10.0 * radius
     c0 = np.sqrt(air.gamma * p_a / rho_a)
     if init.remap_time is None:
-        probe = run_1d(init.explosive, radius, init.cells, length, r_lim / c0 + radius / hx.detonation_velocity, gas,
-                       [r_lim], sc.output.arrival_fraction, j)
+        probe = run_1d(init.explosive, radius, init.cells, init.air_ratio, length,
+                       r_lim / c0 + radius / hx.detonation_velocity, gas, [r_lim], sc.output.arrival_fraction, j)
         t_remap = probe.summary["gauges"][0]["arrival_time"]
         if t_remap is None:
             raise ScenarioError("initial.remap_time: the 1D blast never reached the limit radius "
@@ -158,7 +160,7 @@ def charge_initial(sc, g) -> ChargeFields:
     else:
         t_remap = init.remap_time
     # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
-    res = run_1d(init.explosive, radius, init.cells, length, max(t_remap, 1e-12), gas, j=j)
+    res = run_1d(init.explosive, radius, init.cells, init.air_ratio, length, max(t_remap, 1e-12), gas, j=j)
     setup = res.setups[0]
     st = {k: np.asarray(v)[0] for k, v in res.state._asdict().items()}
     profile = rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], setup.explosive_zones,
@@ -178,6 +180,7 @@ def charge_initial(sc, g) -> ChargeFields:
     info = {"remap_time": float(t_remap), "remap_radius": float(r_dist), "limit_radius": float(r_lim),
             "charge_radius": float(radius), "charge_mass": float(mass), "charge_center": centre.tolist(),
             "kb_burst": kb_burst, "one_d_zones": int(setup.cells),
+            "one_d_air_zone": float(init.air_ratio * radius / init.cells),
             "remap_share": out.share,
             "remap_mass_error": float(np.sum(out.mass) / out.targets[0] - 1.0),
             "remap_products_error": float(np.sum(out.products) / out.targets[1] - 1.0),

@@ -195,7 +195,7 @@ class Euler:
             if info["kb_burst"] is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
                 r = kb_compare.distances(setup.gauges, info["charge_center"])
                 gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"])
-            out.update(charge_mass=info["charge_mass"], remap_time=t0)
+            out.update(charge_mass=info["charge_mass"], remap_time=t0, one_d_air_zone=info["one_d_air_zone"])
         out["gauges"] = gauges
         return out
 
