@@ -4,7 +4,9 @@ One step of length dt (all particle loops are whole-array operations):
 
 1. P2G of every transferred quantity at once: nodal mass (Eq. 21), momentum
    (Eq. 18), internal force (Eq. 19, with the artificial bulk viscosity q
-   added to the pressure) and prescribed traction (Eq. 20), as one combined
+   added to the pressure; gas particles on a 2D/3D linear grid take the
+   gradient at their cell's centre, :func:`cell_centre_gradient`) and
+   prescribed traction (Eq. 20), as one combined
    scatter (GPU) or one fused scalar scatter per channel (CPU, see
    :func:`particle_to_grid`); body force m_I b on the grid (first term of Eq. 20).
 2. Nodal momentum update, Eq. (22)-(23); face conditions on the new nodal
@@ -37,7 +39,8 @@ One step of length dt (all particle loops are whole-array operations):
    conserves the energy (tests/test_mpm.py). Only when ``Config.blend``.
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
    momentum; face conditions and constraints again.
-5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28);
+5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28)
+   (gas particles on a 2D/3D linear grid: at the cell centre, as their force);
    density, Eq. (29) (rho / (1 + d eps_kk); no deformation gradient is kept);
    q work heats the particle (000 Eq. 13 with p -> p + q); stress, energy and
    history by each material's model (Jaumann rate, Eq. 30, inside the model),
@@ -334,6 +337,65 @@ def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     return expand(materialise(compute, P, jnp.any(P.active)))
 
 
+def _fluid_materials(config: Config) -> tuple:
+    """Indices of the fluid-model materials (gases, detonation products)."""
+    return tuple(k for k, m in enumerate(config.models) if m.name == "fluid")
+
+
+def uses_cell_centre_gradient(config: Config) -> bool:
+    """Whether :func:`cell_centre_gradient` applies: linear shape functions, 2D or 3D, some gas material."""
+    return config.shape.name == "linear" and config.grid.dim > 1 and bool(_fluid_materials(config))
+
+
+def cell_centre_gradient(P: Particles, grid: Grid, config: Config, w, grad, r):
+    """The gas particles' (fluid models') shape-function gradient, weight and radius of the internal force
+    (Eq. 19, and the r-z hoop term) and of the strain increment (Eqs. 27-28) on a 2D/3D linear grid: those
+    of the centre of the particle's cell, x_c, not of x_p. Returns (grad, w_hoop, r_hoop); solids keep theirs.
+
+    Why: about a gas at rest at pressure p (stress -p I; bulk modulus K = rho c^2; displacement u, the
+    particles moving with the grid), the Eq. (19) force f_I = sum_p V_p p_p grad N_I(x_p) linearises to
+
+        delta f_I = -sum_p V_p (K - p) (div u)_p grad N_I(x_p)  +  p sum_p V_p [grad grad N_I](x_p) u_p,
+
+    the first term from the particle's pressure and volume (Eq. 29), the second from the particle moving
+    through the position-dependent gradient. In the continuum the second integrates by parts to
+    +p int (div u) grad N_I and the stiffness is K (div u)^2. The bilinear (trilinear) grad N_I is
+    discontinuous across cell faces; the particles sample only its in-cell part (grad grad N_I = the
+    mixed derivatives, +-1/h^2), so the stiffness they give is sum_p V_p [(K - p)(div u)^2 - p u . grad(div u)]_p,
+    whose second part is indefinite: M^-1 K has eigenvalues down to -p / (rho h^2), an exponential
+    growth at a rate up to sqrt(p / rho) / h per unit time, whatever dt, q or the particle layout (air at
+    1 bar, h = 1 mm: 2.7e5-2.9e5 1/s in the linearised grid model, 1.5e5-2.1e5 1/s measured, i.e. 1.31 per
+    step at cfl 0.5: ~100 m/s after ~200 steps from round-off, docs/cfdmp.md). In 1D grad N is constant
+    in a cell and the term is absent.
+
+    With the cell-centre gradient (the cell's mean dilatation: Nagtegaal, Parks & Rice, CMAME 4 (1974)
+    153; Hughes, IJNME 15 (1980) 1413, B-bar; FLIP's cell-centred pressure, Brackbill & Ruppel, JCP 65
+    (1986) 314) used for both the force and the particle's volume change, the force of a pressure field no
+    longer depends on where the particles sit in their cells, and the stiffness is
+    sum_c (sum_{p in c} V_p) (K - p) (div u(x_c))^2 >= 0 for K >= p (ideal gas: K = gamma p): the gas at
+    rest is neutrally stable, as on a 1D linear grid (same stiffness there). K - p, not K: particles that
+    expand in place overfill their cell, and without the position-dependent gradient nothing takes that
+    back until they cross into the next cell, so sub-cell (small-amplitude) sound runs at c sqrt(1 - p / K)
+    on a linear grid (air: 0.53 c, period ratio 1.87; measured fundamental period of an air column: 1.88 x
+    2 L / c on 20 cells in 1D, 1.90 on 10 cells in 2D with this change); GIMP's continuous gradient
+    supplies the missing p (1.01 / 1.04). The nodal
+    forces of a gas at rest are unchanged where a cell's particles sit symmetrically about its centre
+    (grad N_I is linear in the other coordinates within a cell). Force and volume change use the same
+    gradient: the pressure's power on nodal velocities v_I, sum_p V_p p_p div v(x_c), is the work the
+    particle's energy update books for them (up to the MUSL re-map, as before). In r-z the hoop term's
+    N_I / r is taken at the cell centre too (N_I(x_c) = 1/4, r_c).
+    """
+    d, h = grid.dim, grid.cell_size
+    gas = functools.reduce(operator.or_, [P.material == k for k in _fluid_materials(config)]) & P.active
+    offset = np.array([[(s >> (d - 1 - j)) & 1 for j in range(d)] for s in range(2 ** d)])  # stencil order (expand)
+    grad = tuple(jnp.where(gas, jnp.asarray((2.0 * offset[:, j] - 1.0) / (h * 2 ** (d - 1)))[:, None], grad[j])
+                 for j in range(d))
+    if not grid.axisymmetric:
+        return grad, w, r
+    first = jnp.clip(jnp.floor((P.x[:, 0] - grid.origin[0]) / h), 0, grid.cells[0] - 1)  # as shape._linear_basis
+    return grad, jnp.where(gas, 1.0 / 2 ** d, w), jnp.where(gas, grid.origin[0] + (first + 0.5) * h, r)
+
+
 def step(state: State, dt, params: Params, config: Config, source: NodalSource | None = None) -> State:
     """One MUSL step of length dt (module docstring). Pure; jit with ``config`` static.
     ``source``: nodal mass, momentum and force from outside the particles (a coupled run), or None; or a
@@ -351,6 +413,9 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     m = jnp.where(act, P.mass, 0.0)
     vol = jnp.where(act, P.mass / P.point.density, 0.0)  # m_p / rho_p of Eq. (19)
     r = jnp.where(act, P.x[:, 0], 1.0)  # radius (axisymmetric)
+    w_hoop, r_hoop = w, r
+    if uses_cell_centre_gradient(config):  # gas on a 2D/3D linear grid: a stable pressure force
+        grad, w_hoop, r_hoop = cell_centre_gradient(P, grid, config, w, grad, r)
     stress = P.point.stress
 
     def sigma(i, j):  # q raises the pressure (ERRATA 000-10)
@@ -363,7 +428,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         for j in range(d):
             f = f - (vol * sigma(i, j)) * grad[j]
         if grid.axisymmetric and i == 0:
-            f = f - (vol * sigma(2, 2) / r) * w  # hoop stress in the r-momentum
+            f = f - (vol * sigma(2, 2) / r_hoop) * w_hoop  # hoop stress in the r-momentum
         forces.append(f)
     mw = m * w
     channels = [mw] + [mw * P.v[:, i] for i in range(d)] + forces
@@ -417,7 +482,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     # Eqs. (27)-(28) from the velocity gradient L_ij = sum_I v_iI dN_I/dx_j
     L = {(i, j): stencil_sum(v2[i] * grad[j]) for i in range(d) for j in range(d)}
     if grid.axisymmetric:
-        L[2, 2] = stencil_sum(w * v2[0]) / r  # hoop rate v_r / r
+        L[2, 2] = stencil_sum(w_hoop * v2[0]) / r_hoop  # hoop rate v_r / r
     sym = {(i, j): 0.5 * dt * (L[i, j] + L[j, i]) for i, j in L}
     skew = {(i, j): 0.5 * dt * (L[i, j] - L[j, i]) for i, j in L if i != j}
     dvol = sum(sym[i, i] for i in range(3) if (i, i) in sym)
