@@ -26,6 +26,11 @@ def _zones(setup, dtype):
     return None if zones is None else scheme.Zones(*(jnp.asarray(z, dtype) for z in zones))
 
 
+def _afterburn(setup, dtype):
+    afterburn = getattr(setup, "afterburn", None)
+    return None if afterburn is None else scheme.Afterburn(*(jnp.asarray(a, dtype) for a in afterburn))
+
+
 class Lagrangian1D:
     name = "lagrangian1d"
     scenario_model = Scenario
@@ -49,7 +54,8 @@ class Lagrangian1D:
         return scheme.Params(num=scheme.Numerics(*map(arr, setup.numerics)),
                              bc=scheme.Boundaries(*map(arr, setup.boundaries)),
                              gauges=scheme.Gauges(arr(setup.gauges), arr(setup.ambient_pressure), arr(threshold)),
-                             x_right0=arr(setup.x[-1]), zones=_zones(setup, dtype))
+                             x_right0=arr(setup.x[-1]), zones=_zones(setup, dtype),
+                             afterburn=_afterburn(setup, dtype))
 
     def static(self, setup, sc: Scenario) -> scheme.Static:
         return scheme.Static(setup.left_velocity_set, setup.right_fixed, _geometry(setup))
@@ -172,6 +178,9 @@ def charge_summary(sc: Scenario, setup, hist: dict, state: scheme.State) -> dict
         "cj_pressure": cj.pressure, "burn_front_pressure": front,
         "burn_front_pressure_ratio": None if front is None else front / cj.pressure,
         "energy_error_relative": float(hist["energy_error"][-1]) / energy,
+        # afterburning energy released by the end of the run [J, J/m or J/m^2 like charge_mass]; 0 without
+        "afterburn_energy_released": info["measure"] * float(state.afterburn_released),
+        "afterburn_energy_total": info["afterburn_energy"],  # charge.afterburn_energy x charge volume
     }
     t = float(state.t)
     gauges = []

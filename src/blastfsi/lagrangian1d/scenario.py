@@ -90,7 +90,11 @@ class Plate(Strict):
 class Charge(Strict):
     """Explosive charge centred at r = 0 (a sphere, an infinite cylinder, or the slab |x| <= radius
     of which [0, radius] is simulated), lit at its centre and burnt by 000 Eqs. (52)-(53).
-    Give exactly one of ``mass`` and ``radius``."""
+    Give exactly one of ``mass`` and ``radius``. Optional afterburning (off by default):
+    ``afterburn_energy`` Q [J per m^3 of unreacted explosive] released in the burnt products at the
+    constant rate Q / (rho0 (afterburn_end - afterburn_start)) per unit mass between
+    ``afterburn_start`` and ``afterburn_end`` (s after lighting; Radioss LAW5 Eadd/Tstart/Tstop,
+    LS-DYNA *EOS_JWL_AFTERBURN constant rate)."""
 
     explosive: str = Field("tnt", min_length=1, description="explosive from the material library (JWL)")
     mass: Optional[float] = Field(None, gt=0.0, le=1e7, description=(
@@ -98,11 +102,27 @@ class Charge(Strict):
     radius: Optional[float] = Field(None, gt=0.0, le=100.0, description="charge radius [m]")
     detonation_velocity: Optional[float] = Field(None, gt=0.0, le=2e4, description=(
         "D of the programmed burn [m/s]; default the explosive's"))
+    afterburn_energy: float = Field(0.0, ge=0.0, le=1e12, description=(
+        "afterburning: energy added to the detonation products per unit volume of unreacted explosive "
+        "[J/m^3] (Radioss LAW5 Eadd), released at a constant rate between afterburn_start and "
+        "afterburn_end; 0 (default): no afterburning"))
+    afterburn_start: float = Field(0.0, ge=0.0, le=1e3, description=(
+        "afterburning: start of the release [s after lighting] (Tstart); at least the time the "
+        "programmed burn of the whole charge completes, (R + h) / D"))
+    afterburn_end: Optional[float] = Field(None, gt=0.0, le=1e3, description=(
+        "afterburning: end of the release [s after lighting] (Tstop), > afterburn_start; required "
+        "with afterburn_energy > 0"))
 
     @model_validator(mode="after")
     def _one_size(self):
         if (self.mass is None) == (self.radius is None):
             raise ValueError("give exactly one of charge.mass and charge.radius")
+        if self.afterburn_end is not None and self.afterburn_end <= self.afterburn_start:
+            raise ValueError(f"charge.afterburn_end ({self.afterburn_end} s) must be > charge.afterburn_start "
+                             f"({self.afterburn_start} s)")
+        if self.afterburn_energy > 0.0 and self.afterburn_end is None:
+            raise ValueError("charge.afterburn_end: required when charge.afterburn_energy > 0 (the release "
+                             "window is [afterburn_start, afterburn_end))")
         return self
 
 

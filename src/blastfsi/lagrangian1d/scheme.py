@@ -47,6 +47,11 @@ Geometry and materials (seed 000 Sec. 4.1, the 1D detonation):
   trapezoidal p dV work with p/rho = F (f(rho)/rho + w e), solved exactly
   (linear in the new e); for an ideal gas it is Eq. (16) itself. The time step
   uses the EOS sound speed of the fully burnt state (F = 1), an upper bound.
+* Optional afterburning (:func:`afterburn_increment`, ``Params.afterburn``; off when None): a
+  prescribed energy source in the burnt products, released at a constant rate over a time window
+  (Radioss /MAT/LAW5 Eadd with Tstart/Tstop, LS-DYNA *EOS_JWL_AFTERBURN constant-rate option). The
+  increment enters the energy update as a source (e' = e + de - p dV work), and the released total is
+  booked in the energy budget (``State.afterburn_released``).
 """
 from __future__ import annotations
 
@@ -109,15 +114,25 @@ class Zones(NamedTuple):
         return JWLParams(self.A, self.B, self.R1, self.R2, self.omega, self.rho0)
 
 
+class Afterburn(NamedTuple):
+    """Afterburning energy source (see :func:`afterburn_increment`)."""
+
+    rate: jnp.ndarray  # (N,) specific power released in each zone over the window [J/(kg s)]; 0 in inert gas
+    start: jnp.ndarray  # start of the window [s]
+    end: jnp.ndarray  # end of the window [s]
+
+
 class Params(NamedTuple):
     """Everything the step reads besides the state (traced; stacked over an ensemble).
-    ``zones`` None: every zone is the ideal gas of ``num.gamma`` (the plate problems)."""
+    ``zones`` None: every zone is the ideal gas of ``num.gamma`` (the plate problems).
+    ``afterburn`` None: no afterburning (the step is then the scheme without it, bit for bit)."""
 
     num: Numerics
     bc: Boundaries
     gauges: Gauges
     x_right0: jnp.ndarray  # initial plate position [m]
     zones: Zones | None = None
+    afterburn: Afterburn | None = None
 
 
 class Static(NamedTuple):
@@ -146,6 +161,9 @@ class State(NamedTuple):
     gauge_positive_impulse: jnp.ndarray  # (G,) positive-phase impulse [Pa s]
     gauge_last: jnp.ndarray  # (G,) overpressure at the previous step [Pa]
     zone_burnt: jnp.ndarray  # (N,) pressure F p_E of each zone at the step its burn completes (F reaches 1) [Pa]
+    # energy released so far by afterburning, sum_z m_z de_z (per radian^j, J/m^2 in planar); stays 0
+    # and is read by nothing without afterburning (Params.afterburn None)
+    afterburn_released: jnp.ndarray
     # clock fields of blastfsi.timeloop
     t: jnp.ndarray
     dt_prev: jnp.ndarray  # dt_j, the step that led to t_j (0 at start)
@@ -259,15 +277,42 @@ def implicit_energy(e, q, rho_mid, dtD, p_over_rho_old, F_new, f_over_rho_new, o
         1.0 + 0.5 * F_new * omega * dtD)
 
 
+def afterburn_increment(t, dt, afterburn: Afterburn, zones: Zones):
+    """Specific internal energy each zone gains by afterburning over the step [t, t + dt].
+
+    Models the optional afterburning energy of JWL products with a constant release rate: Radioss
+    /MAT/LAW5 ``Eadd`` released linearly in time between ``Tstart`` and ``Tstop``, LS-DYNA
+    *EOS_JWL_AFTERBURN with the constant-rate option. With Q the added energy per unit volume of
+    unreacted explosive (density rho0) and [t_s, t_e) the window, a burnt zone gains
+
+        de/dt = Q / (rho0 (t_e - t_s))   for t_s <= t < t_e, and 0 otherwise,
+
+    here ``afterburn.rate`` per zone (0 in the air). The rate is integrated exactly over the overlap
+    of the step with the window,
+
+        de = rate * max(0, min(t + dt, t_e) - max(t, t_s, t_b)),
+
+    so the increments of successive steps add up to rate (t_e - t_s): Q per unit initial volume,
+    Q V_charge in all. t_b = t_L + 1.5 h / D is the time the zone's programmed burn completes
+    (000 Eq. 53, F reaches 1): unburnt or partly burnt explosive gains nothing. (The charge set-up
+    requires t_s >= the burn completion time of every zone, so no energy is withheld.)"""
+    burnt = zones.lighting_time + 1.0 / zones.burn_rate  # F = 1 from here on (-inf in inert gas)
+    lo = jnp.maximum(jnp.maximum(t, afterburn.start), burnt)
+    hi = jnp.minimum(t + dt, afterburn.end)
+    return afterburn.rate * jnp.maximum(hi - lo, 0.0)
+
+
 def total_energy(state: State, bc: Boundaries):
     """Internal + kinetic energy per unit area (kinetic from the half-step velocities)."""
     nm = node_masses(state.zone_mass, bc.right_mass)
     return jnp.sum(state.zone_mass * state.e) + 0.5 * jnp.sum(nm * state.v**2)
 
 
-def vnr_step(s: State, dt, node_mass, num: Numerics, bc: Boundaries, static: Static, zones: Zones):
+def vnr_step(s: State, dt, node_mass, num: Numerics, bc: Boundaries, static: Static, zones: Zones,
+             afterburn: Afterburn | None = None):
     """Advance one time step dt = dt_{j+1} (002 Sec. 2 sequence); ``node_mass``
-    from :func:`node_masses`. Pure; leaves the clock fields to the time loop."""
+    from :func:`node_masses`. Pure; leaves the clock fields to the time loop. ``afterburn``: the
+    energy source of :func:`afterburn_increment`, added to e in the energy update."""
     j = static.geometry
     vol = zone_volume(s.x, j)
     rho = s.zone_mass / vol
@@ -290,7 +335,13 @@ def vnr_step(s: State, dt, node_mass, num: Numerics, bc: Boundaries, static: Sta
     q = viscous_pressure(rho_mid, v[1:] - v[:-1], s.a, num)
     rho_new = s.zone_mass / vol_new
     F_new = burn_fraction(s.t + dt, zones)
-    e = implicit_energy(s.e, q, rho_mid, dtD, p_eos / rho, F_new,
+    extra = {}
+    e_src = s.e
+    if afterburn is not None:
+        de = afterburn_increment(s.t, dt, afterburn, zones)
+        e_src = s.e + de  # source term of de/dt = -p dv/dt + S, booked exactly as m de
+        extra["afterburn_released"] = s.afterburn_released + jnp.sum(s.zone_mass * de)
+    e = implicit_energy(e_src, q, rho_mid, dtD, p_eos / rho, F_new,
                         jwl.reference_pressure(rho_new, zones.eos()) / rho_new, zones.omega)
     area_new = node_area(x, j)
     work = dt * (p_left * v[0] * area_new[0] - bc.right_pressure * v[-1] * area_new[-1])
@@ -302,6 +353,7 @@ def vnr_step(s: State, dt, node_mass, num: Numerics, bc: Boundaries, static: Sta
         boundary_work=s.boundary_work + work,
         zone_burnt=jnp.where((F < 1.0) & (F_new >= 1.0), F_new * jwl.pressure(rho_new, e, zones.eos()),
                              s.zone_burnt),
+        **extra,
     )
 
 
@@ -330,6 +382,8 @@ def history_row(s: State, params: Params, static: Static, zones: Zones):
     v_plate = 0.0 * s.v[-1] if static.right_fixed else s.v[-1]
     plate_impulse = s.face_impulse if static.right_fixed else bc.right_mass * s.v[-1]
     energy_error = total_energy(s, bc) - s.energy0 - s.boundary_work
+    if params.afterburn is not None:
+        energy_error = energy_error - s.afterburn_released  # the afterburning source, booked as supplied
     plate = jnp.stack([
         s.t, s.x[-1] - params.x_right0, v_plate, p[-1] - bc.right_pressure, plate_impulse,
         s.face_impulse, p[0] - bc.right_pressure, energy_error,
@@ -354,7 +408,7 @@ def initial_state(x, v, e, zone_mass, gamma, n_samples: int, n_gauges: int = 0, 
         peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
         gauge_impulse=g, gauge_peak=g - jnp.inf, gauge_arrival=g + jnp.inf, gauge_end=g + jnp.inf,
         gauge_positive_impulse=g, gauge_last=g, zone_burnt=jnp.zeros_like(e),
-        **timeloop.clock(n_samples, N_HIST + n_gauges, x.dtype),
+        afterburn_released=zero, **timeloop.clock(n_samples, N_HIST + n_gauges, x.dtype),
     )
     right = Boundaries(zero, zero, jnp.asarray(right_mass, x.dtype), zero)
     return s._replace(energy0=total_energy(s, right))
@@ -375,7 +429,7 @@ def advance(s: State, params: Params, static: Static, t_stop, max_steps, sample_
         return stable_dt(st.x[1:] - st.x[:-1], st.a, st.v, num)
 
     def step(st, dt):
-        new = vnr_step(st, dt, node_mass, num, bc, static, zones)
+        new = vnr_step(st, dt, node_mass, num, bc, static, zones, params.afterburn)
         pg = gauge_overpressure(st, gauges, zones, j)
         pg_new = jnp.nan_to_num(gauge_overpressure(new._replace(t=st.t + dt), gauges, zones, j))
         maps = blast_maps.update(blast_maps.BlastMaps(st.gauge_peak, st.gauge_arrival, st.gauge_end,

@@ -18,6 +18,13 @@ centre) / D; air zones are never lit (t_L = -inf: F = 1).
 
 Outer end: open at the ambient pressure (a free end of zero mass) unless a
 ``[plate]`` is given (then the 002 plate or rigid wall).
+
+Afterburning (optional, ``charge.afterburn_energy`` Q > 0): each explosive zone gains specific
+internal energy at the constant rate Q / (rho0 (t_e - t_s)) over [t_s, t_e) =
+[``afterburn_start``, ``afterburn_end``) (:func:`blastfsi.lagrangian1d.scheme.afterburn_increment`),
+Q x charge volume in all. The release is restricted to burnt products (F = 1), and t_s must be at
+least (R + h) / D, the time the programmed burn of the last zone completes, so that no zone is
+partly burnt during the release and the whole of Q is released.
 """
 from __future__ import annotations
 
@@ -55,6 +62,7 @@ class Setup:
     info: dict = field(default_factory=dict)
     gauges: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ambient_pressure: float = 0.0
+    afterburn: tuple | None = None  # scheme.Afterburn fields (rate (N,), start, end); None: no afterburning
 
     @property
     def cells(self) -> int:
@@ -141,13 +149,23 @@ def build(sc: Scenario) -> Setup:
     right_mass = 0.0 if plate is None or plate.fixed else (
         plate.areal_mass if plate.areal_mass is not None else plate.density * plate.thickness)
     back = p_a if plate is None or plate.back_pressure is None else plate.back_pressure
+    afterburn = None
+    if ch.afterburn_energy > 0.0:
+        burnt = float(np.max((zones[6] + 1.0 / zones[7])[:nc]))  # (R + h) / D: the last zone's F reaches 1
+        if ch.afterburn_start < burnt:
+            raise ScenarioError(f"charge.afterburn_start ({ch.afterburn_start:.6g} s) must be >= {burnt:.6g} s, the "
+                                "time the programmed burn of this charge completes ((R + h) / D): the afterburning "
+                                "energy is released in burnt products only")
+        rate = ch.afterburn_energy / (hx.density * (ch.afterburn_end - ch.afterburn_start))
+        afterburn = (np.where(hx_zone, rate, 0.0), ch.afterburn_start, ch.afterburn_end)
     info = {"arrival_fraction": sc.output.arrival_fraction,
             "charge_mass": mass, "charge_radius": radius, "charge_zone_width": h, "detonation_velocity": D,
             "explosive": ch.explosive, "explosive_energy": hx.E0 * mass / hx.density,
             "ambient_pressure": p_a, "ambient_density": rho_a, "gamma": gamma, "geometry": sc.domain.geometry,
-            "measure": MEASURE[j], "plate_areal_mass": right_mass}
+            "measure": MEASURE[j], "plate_areal_mass": right_mass,
+            "afterburn_energy": ch.afterburn_energy * mass / hx.density}
     return Setup(x=x, v=np.zeros_like(x), e=e, zone_mass=rho * zone_volume(x, j),
                  numerics=(gamma, sc.numerics.K1, sc.numerics.K2, sc.numerics.cfl),
                  boundaries=(0.0, p_a, right_mass, back), left_velocity_set=True, right_fixed=right_fixed,
                  geometry=j, zones=zones, explosive_zones=nc, info=info,
-                 gauges=np.asarray(sc.output.gauges, float), ambient_pressure=p_a)
+                 gauges=np.asarray(sc.output.gauges, float), ambient_pressure=p_a, afterburn=afterburn)
