@@ -444,7 +444,7 @@ class Cfdmp:
         baseline = np.asarray(state.baseline)
         out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
                "dx": e.grid.dx, "bridge_cells": setup.info["bridge_cells"],
-               **({"remap_time": t0} if "remap_time" in e.info else {}),
+               **({"remap_time": t0, "one_d_air_zone": e.info["one_d_air_zone"]} if "remap_time" in e.info else {}),
                "coupled_faces": setup.info["coupled_faces"],
                "activation_time": float(hist["time"][np.argmax(coupled)]) if coupled.any() else None,
                "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,
