@@ -21,14 +21,10 @@ def _geometry(setup) -> int:
     return getattr(setup, "geometry", 0)
 
 
-def _zones(setup, dtype):
-    zones = getattr(setup, "zones", None)
-    return None if zones is None else scheme.Zones(*(jnp.asarray(z, dtype) for z in zones))
-
-
-def _afterburn(setup, dtype):
-    afterburn = getattr(setup, "afterburn", None)
-    return None if afterburn is None else scheme.Afterburn(*(jnp.asarray(a, dtype) for a in afterburn))
+def _optional(kind, setup, name: str, dtype):
+    """The setup's ``name`` fields as a ``kind`` of arrays, or None where it has none (plate problems)."""
+    fields = getattr(setup, name, None)
+    return None if fields is None else kind(*(jnp.asarray(f, dtype) for f in fields))
 
 
 class Lagrangian1D:
@@ -43,8 +39,8 @@ class Lagrangian1D:
             return jnp.asarray(values, dtype)
 
         return scheme.initial_state(arr(setup.x), arr(setup.v), arr(setup.e), arr(setup.zone_mass), setup.numerics[0],
-                                    n_samples, setup.gauges.size, setup.boundaries[2], zones=_zones(setup, dtype),
-                                    geometry=_geometry(setup))
+                                    n_samples, setup.gauges.size, setup.boundaries[2],
+                                    zones=_optional(scheme.Zones, setup, "zones", dtype), geometry=_geometry(setup))
 
     def params(self, setup, dtype) -> scheme.Params:
         def arr(values):
@@ -54,8 +50,8 @@ class Lagrangian1D:
         return scheme.Params(num=scheme.Numerics(*map(arr, setup.numerics)),
                              bc=scheme.Boundaries(*map(arr, setup.boundaries)),
                              gauges=scheme.Gauges(arr(setup.gauges), arr(setup.ambient_pressure), arr(threshold)),
-                             x_right0=arr(setup.x[-1]), zones=_zones(setup, dtype),
-                             afterburn=_afterburn(setup, dtype))
+                             x_right0=arr(setup.x[-1]), zones=_optional(scheme.Zones, setup, "zones", dtype),
+                             afterburn=_optional(scheme.Afterburn, setup, "afterburn", dtype))
 
     def static(self, setup, sc: Scenario) -> scheme.Static:
         return scheme.Static(setup.left_velocity_set, setup.right_fixed, _geometry(setup))
@@ -68,7 +64,7 @@ class Lagrangian1D:
 
     def snapshot(self, state: scheme.State, setup) -> Polyline:
         j = _geometry(setup)
-        zones = _zones(setup, np.asarray(state.e).dtype)
+        zones = _optional(scheme.Zones, setup, "zones", np.asarray(state.e).dtype)
         zones = scheme.ideal_gas_zones(setup.numerics[0], state.e.size, state.e.dtype) if zones is None else zones
         rho = state.zone_mass / scheme.zone_volume(state.x, j)
         cells = {"density": rho,

@@ -82,7 +82,7 @@ from blastfsi.constitutive import Model, PointState
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.grid import Grid, apply_boundaries, inside
 from blastfsi.mpm.particles import ParticleError, Particles, totals
-from blastfsi.mpm.shape import SHAPES, Shape, expand, factors
+from blastfsi.mpm.shape import SHAPES, Shape, expand, factors, linear_cell
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC, bulk_viscosity, signal_speed
 
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))  # [xx, yy, zz, yz, xz, xy]
@@ -337,14 +337,9 @@ def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     return expand(materialise(compute, P, jnp.any(P.active)))
 
 
-def _fluid_materials(config: Config) -> tuple:
-    """Indices of the fluid-model materials (gases, detonation products)."""
-    return tuple(k for k, m in enumerate(config.models) if m.name == "fluid")
-
-
 def uses_cell_centre_gradient(config: Config) -> bool:
     """Whether :func:`cell_centre_gradient` applies: linear shape functions, 2D or 3D, some gas material."""
-    return config.shape.name == "linear" and config.grid.dim > 1 and bool(_fluid_materials(config))
+    return config.shape.name == "linear" and config.grid.dim > 1 and bool(relaxation.fluid_materials(config.models))
 
 
 def cell_centre_gradient(P: Particles, grid: Grid, config: Config, w, grad, r):
@@ -386,13 +381,14 @@ def cell_centre_gradient(P: Particles, grid: Grid, config: Config, w, grad, r):
     N_I / r is taken at the cell centre too (N_I(x_c) = 1/4, r_c).
     """
     d, h = grid.dim, grid.cell_size
-    gas = functools.reduce(operator.or_, [P.material == k for k in _fluid_materials(config)]) & P.active
+    fluids = relaxation.fluid_materials(config.models)
+    gas = functools.reduce(operator.or_, [P.material == k for k in fluids]) & P.active
     offset = np.array([[(s >> (d - 1 - j)) & 1 for j in range(d)] for s in range(2 ** d)])  # stencil order (expand)
     grad = tuple(jnp.where(gas, jnp.asarray((2.0 * offset[:, j] - 1.0) / (h * 2 ** (d - 1)))[:, None], grad[j])
                  for j in range(d))
     if not grid.axisymmetric:
         return grad, w, r
-    first = jnp.clip(jnp.floor((P.x[:, 0] - grid.origin[0]) / h), 0, grid.cells[0] - 1)  # as shape._linear_basis
+    first = linear_cell((P.x[:, 0] - grid.origin[0]) / h, grid.cells[0])
     return grad, jnp.where(gas, 1.0 / 2 ** d, w), jnp.where(gas, grid.origin[0] + (first + 0.5) * h, r)
 
 

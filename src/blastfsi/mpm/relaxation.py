@@ -48,10 +48,15 @@ MIXED = 0.01  # minority share of a node's gas compliance from which its particl
 MAX_VOLUME_CHANGE = 0.25  # largest relative volume change of a particle in one relaxation
 
 
+def fluid_materials(models) -> tuple:
+    """Indices of the fluid-model materials (gases, detonation products)."""
+    return tuple(k for k, m in enumerate(models) if m.name == "fluid")
+
+
 def gas_materials(models, enabled: bool = True) -> tuple:
     """The material indices to relax (``Config.relax``): every fluid-model material when ``enabled`` and there
     are two or more of them, else none."""
-    gases = tuple(k for k, m in enumerate(models) if m.name == "fluid")
+    gases = fluid_materials(models)
     return gases if enabled and len(gases) > 1 else ()
 
 

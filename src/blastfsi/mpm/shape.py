@@ -28,9 +28,14 @@ class Shape(NamedTuple):
     basis: Callable  # (xi (n,), half (n,) in cell units, cells) -> (first node (n,), [N_a (n,)], [dN_a/dxi (n,)])
 
 
+def linear_cell(xi, cells):
+    """Index (float) of the cell holding the scaled position xi, the first node of its linear stencil."""
+    return jnp.clip(jnp.floor(xi), 0, cells - 1)
+
+
 def _linear_basis(xi, half, cells):
     """000 Eq. (16) in one direction: N = 1 - |xi - i| on the two nodes of the cell."""
-    first = jnp.clip(jnp.floor(xi), 0, cells - 1)
+    first = linear_cell(xi, cells)
     f = xi - first
     one = jnp.ones_like(f)
     return first.astype(jnp.int32), [1.0 - f, f], [-one, one]
