@@ -39,7 +39,7 @@ import jax.numpy as jnp
 
 from blastfsi.euler import geometry
 from blastfsi.euler.boundaries import pad, shift
-from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config, block_plan
+from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
 
 NG = 2
@@ -160,24 +160,22 @@ def primitive_rows(rows, eos_r, lay):
     return st.rho_k + st.velocity + (st.p,) + ((rows[lay.alpha],) if lay.n == 2 else ()) + (st.rho_e, st.c2)
 
 
-def rate(cells, rows, eos_r, cfg: Config, lay, halo_axis=None, record: bool = False):
-    """L(U) from the cell rows of :func:`primitive_rows` (see :func:`rhs`).
+def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
+    """Semi-discrete right-hand side L(U) of a tuple of conservative rows; record (static): return
+    (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n.
 
-    halo_axis: None (cells and rows span the grid), or the axis of a block (:func:`blocks`) along
-    which ``cells`` carry NG ghost cells each side (the padded grid's cells around the block) and
-    ``rows`` span the block.
+    The whole grid at once: sweeping it block by block (so the temporaries stay in cache) made the
+    step 2-2.5x slower with jax 0.10 on this CPU (2D 200^2 to 1024^2, 3D 64^3 and 128^3, docs/euler.md).
     """
+    cells = primitive_rows(rows, eos_r, lay)
     nm, dtype = lay.n, rows[0].dtype
     nw = len(cells) - 2
-    core = cells if halo_axis is None else tuple(
-        shift(x, halo_axis, NG, x.shape[halo_axis] - 2 * NG) for x in cells)
-    p = core[nm + lay.ndim]
+    p = cells[nm + lay.ndim]
     total, fluxes = [0.0] * lay.nvar, []
     for axis in range(lay.ndim):
         nrm = lay.mom + axis
-        padded = cells if axis == halo_axis else tuple(
-            pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(core))
-        n = padded[0].shape[axis] - 2 * NG
+        padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
+        n = cfg.shape[axis]
         flux, u_face = axis_flux(padded, nw, eos_r, cfg, lay, axis)
         fluxes.append(flux)
         radial = axis == 0 and cfg.geometry != CARTESIAN
@@ -193,29 +191,6 @@ def rate(cells, rows, eos_r, cfg: Config, lay, halo_axis=None, record: bool = Fa
                 div = div - rows[r] * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
             total[r] = total[r] - div / cfg.dx
     return (tuple(total), tuple(fluxes)) if record else tuple(total)
-
-
-def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
-    """Semi-discrete right-hand side L(U) of a tuple of conservative rows; record (static): return
-    (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n."""
-    return rate(primitive_rows(rows, eos_r, lay), rows, eos_r, cfg, lay, None, record)
-
-
-BLOCK_CELLS = 16384  # cells per block of a blocked stage (its temporaries stay in the L2 cache of a core)
-
-
-def blocks(cfg: Config):
-    """(blocking axis, planes per block) of a stage on a large grid, or None (one block).
-
-    The fluxes of a stage are evaluated block by block along the outermost axis (the axial axis
-    of an r-z grid, whose radial factors then span the block): each block needs only NG cells of
-    the padded primitive rows either side, its temporaries stay in cache, and the arithmetic of
-    every cell is that of the unblocked stage.
-    """
-    nd = len(cfg.shape)
-    if nd == 1:
-        return None
-    return block_plan(cfg.shape, 0 if cfg.geometry == CARTESIAN else 1, BLOCK_CELLS)
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):
@@ -234,7 +209,6 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     def combine(i, start, now, rate):  # stage i, row by row: a_i start + (1 - a_i)(now + dt rate)
         return tuple(a[i] * x0 + (1.0 - a[i]) * (x + dt * k) for x0, x, k in zip(start, now, rate))
 
-    spec = blocks(cfg)
     record = moved is not None
     moved0 = tuple(moved) if record else None
 
@@ -243,35 +217,10 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
 
     def stage(i, state):  # state: the rows, or (rows, transfers) when recording
         rows, acc = state if record else (state, None)
-        if spec is None:
-            out = rhs(rows, eos_r, cfg, lay, record)
-            total, fluxes = out if record else (out, None)
-            new = combine(i, rows0, rows, total)
-            return (new, tuple(map(functools.partial(advance_axis, i), moved0, acc, fluxes))) if record else new
-        b, ch = spec
-        cells = tuple(pad(x, b, cfg.bc[b], NG, -1.0 if r == lay.n + b else None)
-                      for r, x in enumerate(primitive_rows(rows, eos_r, lay)))
-
-        def block(j, outs):  # outs: the stage result (and transfers), written block by block over its input
-            start = j * ch
-            cut = lambda x, faces=0: jax.lax.dynamic_slice_in_dim(x, start, ch + faces, axis=b)  # noqa: E731
-            put = lambda o, x: jax.lax.dynamic_update_slice_in_dim(o, x, start, axis=b)  # noqa: E731
-            now = tuple(map(cut, outs[0] if record else outs))
-            halo = tuple(jax.lax.dynamic_slice_in_dim(x, start, ch + 2 * NG, axis=b) for x in cells)
-            out = rate(halo, now, eos_r, cfg, lay, b, record)
-            total, fluxes = out if record else (out, None)
-            new = tuple(map(put, outs[0] if record else outs, combine(i, tuple(map(cut, rows0)), now, total)))
-            if not record:
-                return new
-            # axis b's faces start..start+ch of this block (the last one shared with the next block, which
-            # computes it from the same cells): read from the transfers at the stage's start, not from outs
-            t = []
-            for axis, (o_a, m0, m, fl) in enumerate(zip(outs[1], moved0, acc, fluxes)):
-                e = 1 if axis == b else 0
-                upd = advance_axis(i, tuple(cut(x, e) for x in m0), tuple(cut(x, e) for x in m), fl)
-                t.append(tuple(map(put, o_a, upd)))
-            return new, tuple(t)
-        return jax.lax.fori_loop(0, cfg.shape[b] // ch, block, state)
+        out = rhs(rows, eos_r, cfg, lay, record)
+        total, fluxes = out if record else (out, None)
+        new = combine(i, rows0, rows, total)
+        return (new, tuple(map(functools.partial(advance_axis, i), moved0, acc, fluxes))) if record else new
 
     if not record:
         return jnp.stack(jax.lax.fori_loop(0, 2, stage, rows0))
