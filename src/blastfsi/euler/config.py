@@ -131,16 +131,3 @@ def check_params(params: Params, cfg: Config) -> None:
     if tuple(params.eos.shape) != (cfg.n_materials, 6):
         raise ValueError(f"Params.eos must have shape ({cfg.n_materials}, 6) [A, B, R1, R2, omega, rho0] rows, "
                          f"got {tuple(params.eos.shape)}")
-
-
-def block_plan(shape: tuple, b: int, block_cells: int):
-    """(b, planes per block) splitting ``shape`` along axis ``b`` into equal blocks of at most about
-    ``block_cells`` cells (at least one plane), or None when one block holds the whole grid."""
-    m = shape[b]
-    plane = 1
-    for d, k in enumerate(shape):
-        plane *= k if d != b else 1
-    ch = max(1, min(m, block_cells // plane))
-    while m % ch:
-        ch -= 1
-    return None if ch == m else (b, ch)

@@ -58,7 +58,7 @@ import jax.numpy as jnp
 
 from blastfsi.euler import geometry
 from blastfsi.euler.boundaries import extend, extend_coefficient, shift
-from blastfsi.euler.config import CARTESIAN, Config, block_plan
+from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.mixture import cell_state, pressure_velocity
 
 NG = 2  # ghost cells: theta (Eq. 4) of the cell next to a boundary face needs rho two cells out
@@ -158,7 +158,12 @@ def blocks(cfg: Config, axis: int):
     """
     if len(cfg.shape) == 1 or math.prod(cfg.shape) <= BLOCKED_ABOVE:
         return None
-    return block_plan(cfg.shape, 0 if axis != 0 else 1, BLOCK_CELLS)
+    b = 0 if axis != 0 else 1
+    m = cfg.shape[b]
+    planes = max(1, min(m, BLOCK_CELLS * m // math.prod(cfg.shape)))  # equal blocks of about BLOCK_CELLS cells
+    while m % planes:
+        planes -= 1
+    return None if planes == m else (b, planes)
 
 
 def blocked(fn, ins, outs, cfg: Config, axis: int):
