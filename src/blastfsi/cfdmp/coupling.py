@@ -241,10 +241,18 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, stencil=None
     it continues the gas inside (zero gradient, like the Eulerian outflow ghost cells) instead of the vacuum a
     free MPM face would be. The particles give such a node only the half of its support inside the box; the
     mirror half adds the same mass and momentum (so the node keeps the particles' velocity and the inertia of
-    a full support) and the traction -p_I A n, p_I the mass-weighted pressure of the gas particles around
-    the node (a node on k such faces: 2^k - 1 mirrors). Without the mirror mass a rarefied node (gas blown
-    past a slab's corner) took the whole traction on a sliver of mass, and a gas at rest in such a box ran
-    away (tests/test_cfdmp.py).
+    a full support) and the traction -p_I A n, p_I = sum_p N_Ip V_p p_p / sum_p N_Ip V_p the volume-weighted
+    pressure of the gas particles around the node (a node on k such faces: 2^k - 1 mirrors). Without the
+    mirror mass a rarefied node (gas blown past a slab's corner) took the whole traction on a sliver of mass,
+    and a gas at rest in such a box ran away (tests/test_cfdmp.py).
+
+    Volume, not mass, weights the pressure: the traction stands for the outside continuation of the
+    particles' own pressure force on the node, sum_p V_p p_p dN_I/dn, a volume integral. With mass weights a
+    compressed, hot particle (air at 11.5 kg/m^3 and 1.6 GPa, 3 % of a cell's volume, the mass of its
+    rarefied neighbours) set the traction of a face node holding 1.4e-6 kg/m in he-slab-2d behind the slab
+    at 28.8 us: one step kicked that node by 44 km/s; the kicked particles, stopped by q, heated up to 7e8
+    J/kg and the run stopped at 30.8 us (time step collapsed). Volume weighting keeps the fastest gas below
+    12 km/s up to 32.5 us in that run; a uniform state gets the same traction either way.
 
     The mirror models outflow and rest only: no gas enters the box through such a face (no particles are
     created there), so where the node's gas flows in, the mirror's traction pushed ever fewer particles
@@ -265,10 +273,11 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, stencil=None
     p = -(P.point.stress[:, 0] + P.point.stress[:, 1] + P.point.stress[:, 2]) / 3.0 + P.q
     idx, w = stencil if stencil is not None else mpm.materialised_stencil(P, cfg.grid, cfg.shape)[:2]
     mc = jnp.where(m > 0.0, m * P.wave_speed, 0.0)  # (free slots may hold any wave speed)
-    channels = [w * m, w * (m * p), w * mc] + [w * (m * P.v[:, i]) for i in range(d)]
+    vol = jnp.where(m > 0.0, m / P.point.density, 0.0)
+    channels = [w * m, w * vol, w * mc, w * (vol * p)] + [w * (m * P.v[:, i]) for i in range(d)]
     nodal = mpm.musl.particle_to_grid(idx, channels, cfg.grid.num_nodes, cfg.combined_scatter)
-    m_node, mc_node, momentum = nodal[:, 0], nodal[:, 2], nodal[:, 3:]
-    p_node = jnp.where(m_node > 0.0, nodal[:, 1] / jnp.where(m_node > 0.0, m_node, 1.0), 0.0)
+    m_node, v_node, mc_node, momentum = nodal[:, 0], nodal[:, 1], nodal[:, 2], nodal[:, 4:]
+    p_node = jnp.where(v_node > 0.0, nodal[:, 3] / jnp.where(v_node > 0.0, v_node, 1.0), 0.0)
     # u_n / c as a ratio of the nodal sums (m u_n) / (m c): no division by a node's (possibly tiny) mass;
     # outflow_area is -A n_out per axis
     area = jnp.sqrt(jnp.sum(layout.outflow_area ** 2, axis=1))
@@ -452,47 +461,84 @@ def particle_content(P: mpm.Particles):
     return P.mass, P.mass[:, None] * P.v, P.mass * (P.point.energy + ke)
 
 
-def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: Static, layout: Layout):
-    """Delete the particles outside the box. Gas: through a coupled face its mass, momentum and energy go
-    to the reservoir of the face cell it crossed (000 Eqs. 49-51; :func:`receive` settles it into the
-    Eulerian cell); through a face on the domain boundary it leaves the run (``boundary_out``). Structure
-    fragments leave the run through any face (the grid holds no solid outside the box): their momentum and
-    energy are booked in ``boundary_out``, their mass in ``structure_out``."""
-    P = state.particles
+def cut_at_coupled_faces(x, half, lo, hi, static: Static):
+    """Gas particles straddling a coupled face, cut at it: per particle (share of it beyond the face,
+    index of that face cell or -1, centre and half-size of the part inside (n, d)).
+
+    A gas particle occupies [x - l, x + l] per direction (l its GIMP half-size). The fraction
+    phi = clip((x + l - hi) / 2l, 0, 1) of it lies beyond an upper coupled face (lower face mirrored): that
+    share leaves to the face cell's reservoir (on the radial axis of an r-z grid the share of the ring's mass,
+    ((x + l)^2 - hi^2) / ((x + l)^2 - (x - l)^2)), and the particle keeps the part inside, [x - l, hi], as its
+    new domain (centre hi - l', half-size l' = (1 - phi) l, the same density). So the particles never overlap
+    the ring cells beyond the face, which stand for that gas on the interface nodes (000 Eqs. 37-39), and
+    the gas leaves at the rate it crosses the face instead of one particle at a time (docs/cfdmp.md)."""
     d = static.mpm.grid.dim
-    n = len(static.gas_material)
-    slot = _gas_index(static, P.material)
-    x = P.x[:, :d]
-    lo, hi = layout.box_lower[:d], layout.box_upper[:d]
-    outside = P.active & jnp.any((x < lo) | (x > hi), axis=1)
-    gas = P.active & (slot >= 0)
-    out_any = gas & outside
-    fragment = outside & (slot < 0)
-    face = jnp.full(P.mass.shape, -1, jnp.int32)
-    first = 0
     h = static.mpm.grid.cell_size
+    share = jnp.zeros(x.shape[:1], x.dtype)
+    face = jnp.full(x.shape[:1], -1, jnp.int32)
+    first = 0
     for (axis, side, _plane), size in zip(static.faces, static.face_sizes):
-        crossed = gas & ((x[:, axis] < lo[axis]) if side == 0 else (x[:, axis] > hi[axis]))
-        lateral = jnp.zeros(P.mass.shape, jnp.int32)
+        l = half[:, axis]
+        past = (x[:, axis] + l - hi[axis]) if side == 1 else (lo[axis] - x[:, axis] + l)
+        phi = jnp.clip(past / jnp.where(l > 0.0, 2.0 * l, 1.0), 0.0, 1.0)
+        lateral = jnp.zeros(x.shape[:1], jnp.int32)
         for a in range(d):
             if a == axis:
                 continue
             n_a = static.box_hi[a] - static.box_lo[a]
             i = jnp.clip(jnp.floor((x[:, a] - lo[a]) / h).astype(jnp.int32), 0, n_a - 1)
             lateral = lateral * n_a + i
-        face = jnp.where(crossed & (face < 0), first + lateral, face)
+        if static.mpm.grid.axisymmetric and axis == 0:  # ring particles: the share of the ring's mass, r dr
+            inner, outer = x[:, 0] - l, x[:, 0] + l
+            span = jnp.where(l > 0.0, outer ** 2 - inner ** 2, 1.0)
+            edge = hi[0] if side == 1 else lo[0]
+            mass_phi = jnp.clip(((outer ** 2 - edge ** 2) if side == 1 else (edge ** 2 - inner ** 2)) / span, 0.0, 1.0)
+        else:
+            mass_phi = phi
+        l_in = (1.0 - phi) * l
+        cut = phi > 0.0
+        x = x.at[:, axis].set(jnp.where(cut, (hi[axis] - l_in) if side == 1 else (lo[axis] + l_in), x[:, axis]))
+        half = half.at[:, axis].set(jnp.where(cut, l_in, l))
+        face = jnp.where(cut, first + lateral, face)
+        share = 1.0 - (1.0 - share) * (1.0 - jnp.where(cut, mass_phi, 0.0))  # (cut at two faces: a corner)
         first += size
+    return share, face, x, half
+
+
+def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: Static, layout: Layout):
+    """Gas leaving the box. At a coupled face the part of a particle beyond it leaves
+    (:func:`cut_at_coupled_faces`) with its share of the particle's mass, momentum and energy, which goes to
+    the reservoir of the face cell (000 Eqs. 49-51; :func:`receive` settles it into the Eulerian cell); a
+    particle wholly beyond is deleted. Through a face on the domain boundary a particle leaves the run whole
+    once its centre is outside (``boundary_out``). Structure fragments leave the run through any face (the
+    grid holds no solid outside the box): their momentum and energy are booked in ``boundary_out``, their
+    mass in ``structure_out``."""
+    P = state.particles
+    d = static.mpm.grid.dim
+    n = len(static.gas_material)
+    slot = _gas_index(static, P.material)
+    lo, hi = layout.box_lower[:d], layout.box_upper[:d]
+    outside = P.active & jnp.any((P.x[:, :d] < lo) | (P.x[:, :d] > hi), axis=1)
+    gas = P.active & (slot >= 0)
+    share, face, x_in, half_in = cut_at_coupled_faces(P.x[:, :d], P.half_size[:, :d], lo, hi, static)
+    to_euler = gas & (face >= 0) & (share > 0.0)
+    fragment = outside & (slot < 0)
+    inside_after = jnp.all((x_in >= lo) & (x_in <= hi), axis=1)
+    gone = (gas & ~to_euler & outside) | (to_euler & ~inside_after) | fragment  # whole, out of the run
+    to_euler = to_euler & ~gone
     mass, mom, energy = particle_content(P)
-    to_euler = out_any & (face >= 0)
-    at = (jnp.where(to_euler, face, first), jnp.clip(slot, 0, n - 1))  # (index ``first`` is dropped)
-    res = res._replace(mass=res.mass.at[at].add(mass, mode="drop"),
-                       momentum=res.momentum.at[at].add(mom, mode="drop"),
-                       energy=res.energy.at[at].add(energy, mode="drop"))
-    gone = (out_any & ~to_euler) | fragment
+    at = (jnp.where(to_euler, face, layout.face_out.shape[0]), jnp.clip(slot, 0, n - 1))  # (that index is dropped)
+    res = res._replace(mass=res.mass.at[at].add(share * mass, mode="drop"),
+                       momentum=res.momentum.at[at].add(share[:, None] * mom, mode="drop"),
+                       energy=res.energy.at[at].add(share * energy, mode="drop"))
     left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(gone & (slot == j), mass, 0.0)) for j in range(n)]),
                             jnp.sum(jnp.where(gone[:, None], mom, 0.0), axis=0)[:d],
                             jnp.sum(jnp.where(gone, energy, 0.0))[None]])
-    P = P._replace(active=P.active & ~outside)
+    keep = jnp.where(to_euler, 1.0 - share, 1.0)
+    whole = to_euler & (keep <= 0.0)
+    P = P._replace(active=P.active & ~gone & ~whole, mass=P.mass * keep, volume0=P.volume0 * keep,
+                   x=P.x.at[:, :d].set(jnp.where(to_euler[:, None], x_in, P.x[:, :d])),
+                   half_size=P.half_size.at[:, :d].set(jnp.where(to_euler[:, None], half_in, P.half_size[:, :d])))
     return state._replace(particles=P), res, budget._replace(
         boundary_out=budget.boundary_out + left, structure_out=budget.structure_out + jnp.sum(jnp.where(
             fragment, mass, 0.0)))
