@@ -26,16 +26,19 @@ def tube(**initial):
     return d
 
 
-@pytest.fixture(scope="module")
-def shock(tmp_path_factory):
-    out = tmp_path_factory.mktemp("cfdmp")
-    coupled = blastfsi.run("cfdmp-shock-tube", out=out / "c", set=FAST)
+def shock_tube_and_its_eulerian_twin(out, overrides):
+    """``cfdmp-shock-tube`` with ``overrides``, and the same tube all-Eulerian (HLLC-MUSCL, cfl 0.4)."""
+    coupled = blastfsi.run("cfdmp-shock-tube", out=out / "c", set=overrides)
     d = example_data("cfdmp-shock-tube")
     d["method"] = "euler"
     d.pop("mpm_region")
     d["numerics"] = {"scheme": "hllc-muscl", "cfl": 0.4}
-    euler = blastfsi.run(d, out=out / "e", set=FAST)
-    return coupled, euler
+    return coupled, blastfsi.run(d, out=out / "e", set=overrides)
+
+
+@pytest.fixture(scope="module")
+def shock(tmp_path_factory):
+    return shock_tube_and_its_eulerian_twin(tmp_path_factory.mktemp("cfdmp"), FAST)
 
 
 def test_gas_at_rest_stays_at_rest():
@@ -102,13 +105,8 @@ def test_shipped_shock_tube_error_stays_within_a_quarter_of_the_eulerian_one(tmp
     """``cfdmp-shock-tube`` as shipped (400 cells, 1.2 ms). Deleting a particle whole when its centre crossed
     the exit face gave L1 ratios 1.20 / 1.46 at 0.6 / 1.2 ms (a suction ahead of the exit, packets past
     it); cutting particles at the face (coupling.cut_at_coupled_faces): 1.21 / 1.16."""
-    common = {"output.plots": False, "output.fields": 3, "output.history_samples": 61}
-    coupled = blastfsi.run("cfdmp-shock-tube", out=tmp_path / "c", set=common)
-    d = example_data("cfdmp-shock-tube")
-    d["method"] = "euler"
-    d.pop("mpm_region")
-    d["numerics"] = {"scheme": "hllc-muscl", "cfl": 0.4}
-    euler = blastfsi.run(d, out=tmp_path / "e", set=common)
+    coupled, euler = shock_tube_and_its_eulerian_twin(
+        tmp_path, {"output.plots": False, "output.fields": 3, "output.history_samples": 61})
     assert_l1_within_a_quarter_of_euler(coupled, euler, RiemannProblem((1.0, 0.0, 1e5), (0.125, 0.0, 1e4), x0=0.3))
 
 
@@ -232,6 +230,23 @@ def test_three_dimensional_coupling_closes_its_mass_budget():
     assert s["budget"]["max_mass_residual_relative"] < 1e-13
     # the shock (554 m/s) reaches the box face at 36 us and the first bridge cells before the end
     assert s["gauges"][1]["region"] == "bridge" and s["gauges"][1]["peak_overpressure"] > 1e4
+
+
+@pytest.mark.slow  # ~5 min on 2 cores
+def test_he_slab_3d_runs_and_closes_its_mass_budget():
+    """Issue 8 item 5 on the shipped coarse 3D explosion-slab case: the run reaches its end with the mass
+    budget closed to round-off, the blast reaches both gauges and the slab is damaged. Gauge 1 (Eulerian)
+    must lie below the 1D spherical reference at r = 125 mm (24.3 MPa, lagrangian1d with 3200 zones) --
+    a 5 mm grid smears the thin shocked layer -- but within a factor 2 of it (measured 15.7 MPa)."""
+    res = blastfsi.run("he-slab-3d", set={"output.fields": 0, "output.plots": False})
+    s = res.summary
+    assert s["coupled_faces"] == ["lower x"] and s["time"] == pytest.approx(2.0e-5)
+    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    g1, g2 = s["gauges"]
+    assert g1["region"] == "euler" and g2["region"] == "particles"
+    assert 0.5 * 24.3e6 < g1["peak_overpressure"] < 24.3e6
+    assert g2["peak_overpressure"] > g1["peak_overpressure"]  # (9 mm in front of the slab: the reflection)
+    assert s["structures"]["max_damage"] == 1.0 and s["structures"]["mass_left_the_box"] == 0.0
 
 
 def test_trace_materials_get_the_mixture_state():
