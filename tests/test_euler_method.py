@@ -152,6 +152,7 @@ BAD = [
     ("grid.cells", {"grid.cells": 20.5}),
     ("boundaries.x", {"domain.geometry": "axisymmetric", "domain.lower": [0.0, -1.0]}),
     ("domain.upper", {"domain": {"lower": [-1.0, -1.0], "upper": [1.0]}}),
+    ("output.plot_plane_z: applies to 3D domains only", {"output.plot_plane_z": 0.0}),
 ]
 
 
@@ -163,6 +164,18 @@ def test_malformed_multid_scenarios_are_rejected_naming_the_key(key, over):
 
         build(sc)
     assert key in str(err.value), str(err.value)
+
+
+@pytest.mark.parametrize("example", ["sedov-3d", "he-slab-3d"])
+def test_plot_plane_outside_a_3d_domain_is_rejected(example):
+    from blastfsi.api import example_data
+
+    d = example_data(example)
+    d.setdefault("output", {})["plot_plane_z"] = 2.0 * d["domain"]["upper"][2] + 1.0
+    with pytest.raises(ScenarioError, match=r"output.plot_plane_z = .* must lie in the domain's z extent"):
+        parse(d)
+    d["output"]["plot_plane_z"] = d["domain"]["upper"][2]
+    assert parse(d).output.plot_plane_z == d["domain"]["upper"][2]
 
 
 def test_cli_rejects_bad_multid_scenario_with_exit_2(tmp_path):

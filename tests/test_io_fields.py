@@ -237,7 +237,7 @@ def test_bad_input_names_the_parameter(tmp_path, call, message):
 
 
 # --------------------------------------------------------------------------------------------- plotting
-def test_field_image_orientation_and_mid_plane():
+def test_field_image_orientation_and_planes():
     origin, spacing = (1.0, -2.0, 0.0), (0.5, 0.25, 0.1)
     x, y, z = cell_centres(origin, spacing, (4, 3, 6))
     image, extent, z_plane = field_image(origin, spacing, 2.0 * x + 3.0 * y + 5.0 * z)
@@ -249,6 +249,17 @@ def test_field_image_orientation_and_mid_plane():
     odd, _, z_odd = field_image(origin, spacing, z[:, :, :5])
     assert z_odd == pytest.approx(0.25, rel=1e-15)
     np.testing.assert_allclose(odd, 0.25, **TOL)
+    # a chosen plane: linear in z between the two layers around it, exactly; beyond the first/last layer's
+    # centre, that layer (and its centre as the plane)
+    at, _, z_at = field_image(origin, spacing, 5.0 * z, 0.17)
+    assert z_at == pytest.approx(0.17, rel=1e-15)
+    np.testing.assert_allclose(at, 5.0 * 0.17, **TOL)
+    low, _, z_low = field_image(origin, spacing, 5.0 * z, 0.0)
+    assert z_low == pytest.approx(0.05, rel=1e-15)
+    np.testing.assert_allclose(low, 5.0 * 0.05, **TOL)
+    high, _, z_high = field_image(origin, spacing, 5.0 * z, 0.6)
+    assert z_high == pytest.approx(0.55, rel=1e-15)
+    np.testing.assert_allclose(high, 5.0 * 0.55, **TOL)
     flat, extent2d, none = field_image((0.0, 0.0), 1.0, x[:, :, 0])
     assert none is None and extent2d == (0.0, 4.0, 0.0, 3.0)
     np.testing.assert_array_equal(flat[1], x[:, 0, 0])  # a row runs along x

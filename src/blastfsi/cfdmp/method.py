@@ -495,7 +495,8 @@ class Cfdmp:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
         grid = finals[0].grid
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
-                            grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s")
+                            grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s",
+                            z_plane=sc.output.plot_plane_z)
         h = histories[0]
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")

@@ -14,7 +14,7 @@ from typing import Literal, Optional
 
 from pydantic import Field, model_validator
 
-from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial, Limiter
+from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_plot_plane
 from blastfsi.mpm.scenario import Body, MPMNumerics
 from blastfsi.scenario import ScenarioBase, Strict
 
@@ -111,4 +111,5 @@ class CfdmpScenario(ScenarioBase):
         for k, b in enumerate(self.structures):
             if b.prescribed:
                 raise ValueError(f"structures[{k}].prescribed: structures are not driven bodies")
+        check_plot_plane(self.output, d)
         return self

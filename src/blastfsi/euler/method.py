@@ -201,7 +201,7 @@ class Euler:
 
     def plots(self, folder, sc: EulerScenario, setups: list, histories: list[dict], members: list[dict],
               finals: list) -> None:
-        """Gauge overpressure histories and the final pressure field (slice z = middle in 3D), member 0."""
+        """Gauge overpressure histories and the final pressure field (3D: the plane output.plot_plane_z), member 0."""
         from blastfsi.plotting.fields import plot_pressure_field
         from blastfsi.plotting.histories import gauge_histories
 
@@ -218,7 +218,7 @@ class Euler:
         labels = ("r [m]", "z [m]") if sc.domain.geometry != "cartesian" else ("x [m]", "y [m]", "z [m]")
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
                             grid.cell_fields["pressure"], axis_labels=labels,
-                            title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s")
+                            title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s", z_plane=sc.output.plot_plane_z)
 
 
 def _per(ndim: int, geometry: str, unit: str) -> str:

@@ -148,6 +148,21 @@ class Numerics(SharedNumerics):
 class EulerOutput(Output):
     arrival_fraction: float = Field(0.01, gt=0.0, le=10.0, description=(
         "arrival time = first time the overpressure exceeds this fraction of the ambient pressure"))
+    plot_plane_z: Optional[float] = Field(None, description=(
+        "z [m] of the plane shown in pressure.png of a 3D run (default: the middle of the domain); a plane "
+        "through the charge is the usual choice"))
+
+
+def check_plot_plane(output: EulerOutput, domain) -> None:
+    """output.plot_plane_z: a 3D domain only, inside its z extent."""
+    z = output.plot_plane_z
+    if z is None:
+        return
+    if domain.ndim != 3:
+        raise ValueError(f"output.plot_plane_z: applies to 3D domains only (this one is {domain.ndim}D)")
+    if not domain.lower[2] <= z <= domain.upper[2]:
+        raise ValueError(f"output.plot_plane_z = {z:g} m must lie in the domain's z extent "
+                         f"[{domain.lower[2]:g}, {domain.upper[2]:g}] m")
 
 
 class EulerSweep(Sweep):
@@ -174,6 +189,7 @@ class EulerScenario(ScenarioBase):
     def _inside(self):
         d = self.domain
         gauge_points(self.output.gauges, d.ndim, d.lower, d.upper)
+        check_plot_plane(self.output, d)
         if self.sweep is not None and self.sweep.energy is not None and self.initial.kind != "point-energy":
             raise ValueError("sweep.energy needs initial.kind = 'point-energy'")
         if self.initial.kind in ("point-energy", "charge") and self.initial.center:

@@ -1,4 +1,4 @@
-"""Pictures of a grid field: 1D line, 2D colour map, 3D mid-plane (z = middle) colour map."""
+"""Pictures of a grid field: 1D line, 2D colour map, 3D colour map of a z-plane (default the middle)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -12,13 +12,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def field_image(origin, spacing, field) -> tuple[np.ndarray, tuple[float, float, float, float], float | None]:
-    """(image, extent, z of the plane or None) of a cell-centred 2D field or of a 3D field's mid-plane.
+def field_image(origin, spacing, field, z: float | None = None
+                ) -> tuple[np.ndarray, tuple[float, float, float, float], float | None]:
+    """(image, extent, z of the plane or None) of a cell-centred 2D field or of a 3D field's plane z.
 
     ``image[row, col]`` is the value at y-cell ``row``, x-cell ``col`` (row 0 at the lower y edge), as
     ``imshow(image, origin="lower", extent=extent)`` expects; extent = (x0, x1, y0, y1) of the cell faces.
-    In 3D the plane is z = z0 + nz dz / 2: the middle cell layer for odd nz, else the mean of the two layers
-    around it (linear interpolation between their centres, which lie dz/2 on either side).
+    In 3D the plane is ``z`` (default the middle, z0 + nz dz / 2), the field interpolated linearly between
+    the two cell layers whose centres bracket it (the middle layer for odd nz, the mean of the two around
+    the middle for even nz); a plane closer to a face than the first layer's centre shows that layer, and
+    the returned z is then that centre.
     """
     field = np.asarray(field)
     origin, spacing = grid_geometry(origin, spacing)
@@ -28,15 +31,20 @@ def field_image(origin, spacing, field) -> tuple[np.ndarray, tuple[float, float,
     z_plane = None
     if field.ndim == 3:
         nz = field.shape[2]
-        field = 0.5 * (field[:, :, (nz - 1) // 2] + field[:, :, nz // 2])
-        z_plane = float(origin[2] + 0.5 * nz * spacing[2])
+        z = origin[2] + 0.5 * nz * spacing[2] if z is None else z
+        s = float(np.clip((z - origin[2]) / spacing[2] - 0.5, 0.0, nz - 1))  # in cell-centre index units
+        k = min(int(np.floor(s)), max(nz - 2, 0))
+        frac = s - k
+        field = field[:, :, k] if frac == 0.0 else (1.0 - frac) * field[:, :, k] + frac * field[:, :, k + 1]
+        z_plane = float(origin[2] + (s + 0.5) * spacing[2])
     upper = origin[:2] + spacing[:2] * np.array(field.shape)
     return field.T, (float(origin[0]), float(upper[0]), float(origin[1]), float(upper[1])), z_plane
 
 
 def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x [m]", "y [m]", "z [m]"),
-                        title: str = "pressure") -> None:
-    """Save a PNG of a cell-centred pressure field [Pa] on a uniform grid (lower corner ``origin``)."""
+                        title: str = "pressure", z_plane: float | None = None) -> None:
+    """Save a PNG of a cell-centred pressure field [Pa] on a uniform grid (lower corner ``origin``); in 3D
+    the plane ``z_plane`` (default the middle, :func:`field_image`)."""
     pressure = np.asarray(pressure, dtype=float)
     origin, spacing = grid_geometry(origin, spacing)
     if len(axis_labels) < origin.size:
@@ -47,14 +55,14 @@ def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x 
         ax.plot(x, pressure, lw=1.2)
         ax.set_xlabel(axis_labels[0]), ax.set_ylabel("pressure [Pa]"), ax.grid(alpha=0.3)
     else:
-        image, extent, z_plane = field_image(origin, spacing, pressure)
+        image, extent, z_plane = field_image(origin, spacing, pressure, z_plane)
         fig, ax = plt.subplots(figsize=(8, 6))
         shown = ax.imshow(image, origin="lower", extent=extent, aspect="equal", interpolation="nearest",
                           cmap="viridis")
         fig.colorbar(shown, ax=ax, label="pressure [Pa]")
         ax.set_xlabel(axis_labels[0]), ax.set_ylabel(axis_labels[1])
         if z_plane is not None:
-            title = f"{title}, mid-plane {axis_labels[2]} = {z_plane:.4g}"
+            title = f"{title}, plane {axis_labels[2]} = {z_plane:.4g}"
     ax.set_title(title)
     fig.tight_layout()
     fig.savefig(Path(png_path), dpi=120)
