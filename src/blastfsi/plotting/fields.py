@@ -63,7 +63,7 @@ def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x 
         ax.set_xlabel(axis_labels[0]), ax.set_ylabel(axis_labels[1])
         if z_plane is not None:
             title = f"{title}, plane {axis_labels[2]} = {z_plane:.4g}"
-    ax.set_title(title)
+    fig.suptitle(title)  # (above the colour bar's exponent, which an axes title overlapped)
     fig.tight_layout()
     fig.savefig(Path(png_path), dpi=120)
     plt.close(fig)
