@@ -21,7 +21,7 @@ from blastfsi.io import results
 from blastfsi.io.fields import (read_grid_snapshot, read_particle_snapshot, write_coupled_snapshot, write_grid_series,
                                 write_grid_snapshot, write_particle_series, write_particle_snapshot)
 from blastfsi.method import Coupled, Grid, Particles
-from blastfsi.plotting.fields import field_image, plot_pressure_field
+from blastfsi.plotting.fields import field_image, plot_particle_damage, plot_pressure_field
 
 TOL = dict(rtol=1e-12, atol=1e-12)
 
@@ -400,3 +400,17 @@ def test_coupled_snapshot_needs_particles_of_the_grid_dimension(tmp_path):
     with pytest.raises(ValueError, match="positions must have the grid's 2 coordinates"):
         write_coupled_snapshot(tmp_path / "a.h5", 0.0, (0.0, 0.0), 1.0, {"p": np.zeros((2, 2))}, np.zeros((3, 3)),
                                {})
+
+
+@pytest.mark.parametrize("ndim", [1, 2, 3])
+def test_plot_particle_damage_writes_png(tmp_path, ndim):
+    rng = np.random.default_rng(0)
+    positions = rng.uniform(0.0, 1.0, (2000, ndim))
+    damage = positions[:, 0]  # a ramp: the picture must carry many colours (or a spread of points in 1D)
+    png = tmp_path / "d.png"
+    plot_particle_damage(png, positions, damage, cell_size=0.1, title="test", z_plane=0.5 if ndim == 3 else None)
+    picture = mpimg.imread(png)
+    assert picture.ndim == 3 and picture.shape[0] > 300 and picture.shape[1] > 400
+    assert len(np.unique(picture[..., :3].reshape(-1, 3), axis=0)) > (10 if ndim == 1 else 100)
+    with pytest.raises(ValueError, match="positions must be"):
+        plot_particle_damage(png, positions, damage[:-1], cell_size=0.1)

@@ -481,13 +481,14 @@ class Cfdmp:
 
     def plots(self, folder: Path, sc: CfdmpScenario, setups: list, histories: list[dict], members: list[dict],
               finals: list) -> None:
-        """Gauge overpressures, the final pressure field, and the budget's mass residual."""
+        """Gauge overpressures, the final pressure field, the structures' final damage (3D: the particles
+        near the plane output.plot_plane_z), and the budget's residuals."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from blastfsi.plotting.fields import plot_pressure_field
+        from blastfsi.plotting.fields import plot_particle_damage, plot_pressure_field
         from blastfsi.plotting.histories import gauge_histories
 
         folder.mkdir(parents=True, exist_ok=True)
@@ -497,6 +498,13 @@ class Cfdmp:
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
                             grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s",
                             z_plane=sc.output.plot_plane_z)
+        particles = finals[0].particles
+        solid = particles.point_fields["structure"] == 1.0
+        if solid.any():
+            plot_particle_damage(folder / "damage.png", particles.positions[solid],
+                                 particles.point_fields["damage"][solid], cell_size=setups[0].grid.cell_size,
+                                 title=f"{sc.name}: structure damage at t = {sc.time.end:g} s",
+                                 z_plane=sc.output.plot_plane_z)
         h = histories[0]
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")

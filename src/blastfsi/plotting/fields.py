@@ -35,6 +35,7 @@ def field_image(origin, spacing, field, z: float | None = None
         s = float(np.clip((z - origin[2]) / spacing[2] - 0.5, 0.0, nz - 1))  # in cell-centre index units
         k = min(int(np.floor(s)), max(nz - 2, 0))
         frac = s - k
+        # (on a layer: that layer alone, so a NaN beyond it -- a structure's cells -- stays out, and nz = 1 works)
         field = field[:, :, k] if frac == 0.0 else (1.0 - frac) * field[:, :, k] + frac * field[:, :, k + 1]
         z_plane = float(origin[2] + (s + 0.5) * spacing[2])
     upper = origin[:2] + spacing[:2] * np.array(field.shape)
@@ -64,6 +65,37 @@ def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x 
         if z_plane is not None:
             title = f"{title}, plane {axis_labels[2]} = {z_plane:.4g}"
     fig.suptitle(title)  # (above the colour bar's exponent, which an axes title overlapped)
+    fig.tight_layout()
+    fig.savefig(Path(png_path), dpi=120)
+    plt.close(fig)
+
+
+def plot_particle_damage(png_path, positions, damage, *, cell_size: float, axis_labels=("x [m]", "y [m]", "z [m]"),
+                         title: str = "damage", z_plane: float | None = None) -> None:
+    """Save a PNG of particles (P, ndim) coloured by damage (0 intact .. 1 failed); in 1D damage against x.
+    In 3D the particles within half a cell of the plane ``z_plane`` (default the middle of their z range)."""
+    positions, damage = np.asarray(positions, dtype=float), np.asarray(damage, dtype=float)
+    if positions.ndim != 2 or positions.shape[1] not in (1, 2, 3) or damage.shape != positions.shape[:1]:
+        raise ValueError(f"positions must be (P, 1..3) and damage (P,), got {positions.shape} and {damage.shape}")
+    fig, ax = plt.subplots(figsize=(8, 6 if positions.shape[1] > 1 else 4))
+    if positions.shape[1] == 1:
+        ax.plot(positions[:, 0], damage, ".", ms=3)
+        ax.set_xlabel(axis_labels[0]), ax.set_ylabel("damage"), ax.set_ylim(-0.05, 1.05), ax.grid(alpha=0.3)
+    else:
+        if positions.shape[1] == 3:
+            z = positions[:, 2]
+            if z_plane is None:
+                z_plane = 0.5 * (z.min() + z.max()) if z.size else 0.0
+            near = np.abs(z - z_plane) <= 0.5 * cell_size
+            positions, damage = positions[near], damage[near]
+            title = f"{title}, |{axis_labels[2]} - {z_plane:.4g}| <= {0.5 * cell_size:.3g}"
+        shown = ax.scatter(positions[:, 0], positions[:, 1], c=damage, s=4, cmap="inferno_r", vmin=0.0, vmax=1.0)
+        fig.colorbar(shown, ax=ax, label="damage")
+        ax.set_aspect("equal")
+        ax.locator_params(axis="x", nbins=3)  # (a thin plate's axis would crowd its tick labels)
+        ax.tick_params(axis="x", labelrotation=45)
+        ax.set_xlabel(axis_labels[0]), ax.set_ylabel(axis_labels[1])
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(Path(png_path), dpi=120)
     plt.close(fig)
