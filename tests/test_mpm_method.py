@@ -135,6 +135,14 @@ def _bad(**changes):
     ({"bodies": [{"lower": [0.0, 0.0], "upper": [0.5, 1.0], "material": "soil-sec44", "pressure": 1e5}]},
      ["bodies[0]", "solid"]),
     ({"numerics.shape": "cubic"}, ["numerics.shape"]),
+    ({"bodies": [{"lower": [0.0, 0.0], "upper": [0.5, 1.0], "material": "soil-sec44",
+                  "supports": [{"lower": [0.6, 0.0], "upper": [0.7, 0.1]}]}]}, ["bodies[0].supports[0]", "no particle"]),
+    ({"bodies": [{"lower": [0.0, 0.0], "upper": [0.5, 1.0], "material": "soil-sec44",
+                  "supports": [{"lower": [0.0, 0.0], "upper": [0.5, 1.0]}]}]}, ["bodies[0].supports", "whole body"]),
+    ({"bodies": [{"lower": [0.0, 0.0], "upper": [0.5, 1.0], "material": "soil-sec44",
+                  "supports": [{"lower": [0.0], "upper": [0.1]}]}]}, ["bodies[0].supports[0]", "2 coordinate"]),
+    ({"bodies": [{"lower": [0.0, 0.0], "upper": [0.5, 1.0], "material": "soil-sec44", "prescribed": True,
+                  "supports": [{"lower": [0.0, 0.0], "upper": [0.5, 0.1]}]}]}, ["supports", "prescribed"]),
 ])
 def test_bad_input_names_the_key(changes, words):
     with pytest.raises(ScenarioError) as err:

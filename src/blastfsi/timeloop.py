@@ -10,9 +10,19 @@ method's three pure functions
   not touch the clock fields);
 * ``history_row(state) -> (n_columns,)``: one history sample, first column time;
 
-until ``t_stop``, ``max_steps`` more steps, or a fault. Steps are shortened to
-land exactly on ``t_stop`` and on every history sample time
-k * sample_interval, where row k is recorded. A method with a particle pool
+until ``t_stop``, ``max_steps`` more steps, or a fault. The steps land exactly
+on ``t_stop`` and on every history sample time k * sample_interval, where row k
+is recorded: the time left to the next of these is split into the fewest equal
+steps no longer than the stable one, n = ceil(left / dt_stable), dt = left / n.
+So a run whose stable step does not change takes one constant step, whatever
+the output times. Shortening only the step that would overshoot (a short step
+in every sample interval) modulates dt, and explicit integrators (the MPM's
+symplectic Euler, any central difference) pump their high-frequency modes under
+such a modulation: an elastic clamped beam of 0.5 mm particles' cells
+(``tests/verification/test_mpm_verification.py``) gained its energy 1e3-fold in
+~12 000 steps with 2001 samples and stayed within 1e-4 with 41 (a scalar
+oscillator at omega dt = 1 under random shortening of one step in seven gains
+1e5 in 2000 cycles). A method with a particle pool
 may pass a fourth function, ``pool_full(state) -> bool``: true when the pool
 has too few free slots for the next step (or the last step could not add the
 particles it needed; the state is still consistent: what did not fit waits
@@ -77,8 +87,11 @@ def run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction, *, s
 
         def go(st):
             target = jnp.minimum(t_stop, next_sample_time(st))
-            lands = st.t + dt_stable >= target
-            dt = jnp.where(lands, target - st.t, dt_stable)
+            left = target - st.t
+            # (the 1 - 1e-12 keeps round-off in t from adding a step: dt may exceed dt_stable by that much)
+            n = jnp.maximum(jnp.ceil(left / dt_stable * (1.0 - 1e-12)), 1.0)
+            lands = n == 1.0
+            dt = jnp.where(lands, left, left / n)
             new = step(st, dt)
             new = new._replace(t=jnp.where(lands, target, st.t + dt), dt_prev=dt, step=st.step + 1)
             due = lands & (target == next_sample_time(st))

@@ -26,7 +26,7 @@ from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
 from blastfsi.euler.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
-from blastfsi.mpm.method import VOIGT_TO_TENSOR
+from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_summary
 from blastfsi.problems import cfdmp as problem
 
 
@@ -69,6 +69,7 @@ class Static(NamedTuple):
     pool_margin: int  # a growing pool counts as full when fewer slots are free than one step can fill (one
     #                   inflow particle per face cell and material), so no emission is ever refused; 0 for a
     #                   fixed pool, full when an emission did not fit
+    tracers: tuple = ()  # structure particle of each output.tracers point
 
 
 def _pool_margin(setup: problem.Setup) -> int:
@@ -134,6 +135,7 @@ class Cfdmp:
         slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)
                       for k in range(len(setup.models)))
         mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots,
+                               prescribed=setup.info["clamped"],
                                blend=any(a > 0.0 for a in setup.info["pic_fraction"]),
                                relax=relaxation.gas_materials(setup.models, setup.info["pressure_relaxation"]))
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
@@ -143,7 +145,7 @@ class Cfdmp:
                              tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
                              bool(np.any(setup.outflow_area)))
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
-        return Static(coupling, flat, setup.capacity, _pool_margin(setup))
+        return Static(coupling, flat, setup.capacity, _pool_margin(setup), tuple(setup.info["tracers"]))
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         e = setup.euler
@@ -244,6 +246,7 @@ class Cfdmp:
         cfg, mcfg = cs.euler, cs.mpm
         lay = params.layout
         gauges = jnp.asarray(static.gauge_cells, jnp.int32)
+        tracers = jnp.asarray(static.tracers, jnp.int32)  # (structure slots: never deleted or moved)
         d = len(cfg.shape)
 
         def stable_dt(s):
@@ -309,6 +312,7 @@ class Cfdmp:
                 disp = jnp.where(on, jnp.linalg.norm(P.x[:nst] - params.structure_x0, axis=1), 0.0)
                 row += [jnp.max(disp), jnp.max(jnp.where(on, P.point.damage[:nst], 0.0)),
                         jnp.max(jnp.where(on, P.point.plastic_strain[:nst], 0.0))]
+            row += list((P.x[tracers, :d] - params.structure_x0[tracers, :d]).reshape(-1))
             flat = [prim["pressure"][gauges] - params.reference_pressure, prim["rho"][gauges]]
             flat += [prim["velocity"][k][gauges] for k in range(d)]
             return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])
@@ -335,6 +339,7 @@ class Cfdmp:
         if setup.info["structure_particles"]:
             cols += [("structure_max_displacement", "m"), ("structure_max_damage", "1"),
                      ("structure_max_plastic_strain", "1")]
+        cols += tracer_columns(len(setup.info["tracers"]), AXES[:nd])
         for k in range(len(setup.euler.gauges)):
             cols += [(f"gauge{k}_overpressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
             cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:nd]]
@@ -461,6 +466,7 @@ class Cfdmp:
                    "displaced_by_structures": {"mass": float(np.asarray(state.displaced)[:n].sum()),
                                                "energy": float(np.asarray(state.displaced)[-1])}},
                "gauges": gauges}
+        out.update(tracer_summary(hist, len(setup.info["tracers"]), AXES[:setup.euler.grid.ndim]))
         if setup.info["structure_particles"]:
             P = state.mpm.particles
             nst = setup.info["structure_particles"]

@@ -15,7 +15,7 @@ from typing import Literal, Optional
 from pydantic import Field, model_validator
 
 from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_plot_plane
-from blastfsi.mpm.scenario import Body, MPMNumerics
+from blastfsi.mpm.scenario import Body, MPMNumerics, Tracers
 from blastfsi.scenario import ScenarioBase, Strict
 
 # Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
@@ -75,6 +75,11 @@ class CfdmpNumerics(MPMNumerics):
         "creates none, structures + the gas particles)"))
 
 
+class CfdmpOutput(EulerOutput, Tracers):
+    """The Eulerian solver's outputs plus ``tracers``: points of the structures (a plate's centre) whose
+    displacement history is recorded, each the structure particle nearest to it at t = 0."""
+
+
 class CfdmpScenario(ScenarioBase):
     method: Literal["cfdmp"] = "cfdmp"
     domain: Domain
@@ -86,7 +91,7 @@ class CfdmpScenario(ScenarioBase):
     materials: dict[str, dict[str, float]] = Field(
         default_factory=dict, description="per-material overrides of library constants")
     numerics: CfdmpNumerics = CfdmpNumerics()
-    output: EulerOutput = EulerOutput()
+    output: CfdmpOutput = CfdmpOutput()
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -111,5 +116,11 @@ class CfdmpScenario(ScenarioBase):
         for k, b in enumerate(self.structures):
             if b.prescribed:
                 raise ValueError(f"structures[{k}].prescribed: structures are not driven bodies")
+        for k, p in enumerate(self.output.tracers):
+            if not self.structures:
+                raise ValueError(f"output.tracers[{k}]: tracers follow structure particles; this scenario has "
+                                 "no [[structures]]")
+            if len(p) != nd:
+                raise ValueError(f"output.tracers[{k}] = {p}: expected {nd} coordinate(s)")
         check_plot_plane(self.output, d)
         return self

@@ -13,7 +13,7 @@ material, ``temperature`` (NaN for the other materials).
 
 Histories: kinetic, internal (stress and q work, incl. plastic), plastic work
 and external work, the energy balance kinetic + internal - initial - external
-work, mass and momentum; per tracer its displacement; per gauge (a point fixed
+work, mass and momentum; per tracer its displacement (summary: final and peak); per gauge (a point fixed
 in space) the pressure, density and velocity of the active particle nearest to
 it (NaN when none lies within one cell). Energies per unit area in 1D, per unit
 length in 2D plane strain, whole rings in r-z.
@@ -73,6 +73,21 @@ def _energy_unit(setup: problem.Setup, unit: str) -> str:
     if setup.grid.axisymmetric or setup.ndim == 3:
         return unit
     return f"{unit}/m" if setup.ndim == 2 else f"{unit}/m^2"
+
+
+def tracer_columns(n: int, axes) -> list:
+    """History columns of ``n`` tracers' displacements."""
+    return [(f"tracer{k}_displacement_{a}", "m") for k in range(n) for a in axes]
+
+
+def tracer_summary(hist: dict, n: int, axes) -> dict:
+    """Per tracer and axis the final displacement and the peak one (the signed value of largest magnitude
+    over the history: a plate's maximum deflection, where the final one is its permanent set)."""
+    if not n:
+        return {}
+    series = [[np.asarray(hist[f"tracer{k}_displacement_{a}"]) for a in axes] for k in range(n)]
+    return {"tracer_displacement": [[float(c[-1]) for c in t] for t in series],
+            "tracer_peak_displacement": [[float(c[np.argmax(np.abs(c))]) for c in t] for t in series]}
 
 
 def _pad3(points: np.ndarray) -> np.ndarray:
@@ -143,8 +158,7 @@ class MPM:
         cols = [("time", "s"), ("kinetic_energy", J), ("internal_energy", J), ("plastic_work", J),
                 ("external_work", J), ("mass", kg)]
         cols += [(f"momentum_{a}", _energy_unit(setup, "kg*m/s")) for a in axes]
-        for k in range(len(setup.tracers)):
-            cols += [(f"tracer{k}_displacement_{a}", "m") for a in axes]
+        cols += tracer_columns(len(setup.tracers), axes)
         for k in range(len(setup.gauges)):
             cols += [(f"gauge{k}_pressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
             cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in axes]
@@ -206,15 +220,14 @@ class MPM:
                "mass": float(hist["mass"][-1]), "mass_change_relative": float(hist["mass"][-1] / hist["mass"][0] - 1.0),
                "kinetic_energy": float(kinetic[-1]), "internal_energy": float(internal[-1]),
                "plastic_work": float(hist["plastic_work"][-1]), "external_work": float(hist["external_work"][-1]),
-               # a prescribed (impactor) body does work that external_work does not count
-               "energy_balance_relative": None if setup.prescribed else float(balance[-1] / scale),
+               # a driven (prescribed, impactor) body does work that external_work does not count; a clamp does
+               # none in the continuum (its grid nodes are at rest), so a clamped body's balance is reported
+               "energy_balance_relative": None if setup.info["driven"] else float(balance[-1] / scale),
                "momentum": [float(hist[f"momentum_{a}"][-1]) for a in axes],
                "max_plastic_strain": float(np.max(np.asarray(P.point.plastic_strain)[on])),
                "max_damage": float(np.max(np.asarray(P.point.damage)[on])),
                "failed_particles": int(np.sum(np.asarray(P.point.damage)[on] >= 1.0))}
-        if setup.tracers:
-            out["tracer_displacement"] = [[float(hist[f"tracer{k}_displacement_{a}"][-1]) for a in axes]
-                                          for k in range(len(setup.tracers))]
+        out.update(tracer_summary(hist, len(setup.tracers), axes))
         if "period_theory" in setup.info:
             out["period_theory"] = setup.info["period_theory"]
             out["period"] = (zero_crossing_period(hist["time"], hist[f"tracer0_displacement_{axes[0]}"])

@@ -444,7 +444,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if source is not None:  # Eqs. (37)-(39)
         m_I, p_I, f_I = m_I + source.mass, p_I + source.momentum, f_I + source.force
     f_I = f_I + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
-    m_fix, p_fix = (nodal[:, 1 + 2 * d], nodal[:, 2 + 2 * d:]) if config.prescribed else (None, None)
+    m_fix, p_fix = (nodal[:, 1 + 2 * d], nodal[:, 2 + 2 * d:2 + 3 * d]) if config.prescribed else (None, None)
     has = m_I > 0.0
     inv_m = jnp.where(has, 1.0 / jnp.where(has, m_I, 1.0), 0.0)[:, None]
     v_old = p_I * inv_m

@@ -15,7 +15,8 @@ Tables:
   [lower face, upper face] of "free", "slip" (symmetry: zero normal velocity),
   "fixed" (zero velocity);
 * ``[[bodies]]``: boxes or cylinders of one library material each, filled with
-  ``particles_per_cell`` particles per cell and direction;
+  ``particles_per_cell`` particles per cell and direction; ``[[bodies.supports]]``:
+  boxes in which the body is clamped (its particles there held at rest);
 * ``[impactor]``: a rod (Taylor bar) striking the lower face of the last axis;
 * ``[numerics]``: shape ("linear" | "gimp"), cfl, bulk-viscosity coefficients, capacity;
 * ``gravity``: body force per unit mass [m/s^2];
@@ -97,6 +98,8 @@ class Body(Strict):
                                                                 "(default: the library's)")
     pressure: Optional[float] = Field(None, gt=0.0, description="initial pressure of a gas [Pa] "
                                                                 "(default: the library's ambient pressure)")
+    supports: list[Support] = Field(default_factory=list, max_length=20, description=(
+        "boxes where the body is clamped: its particles inside are held at rest"))
     top_traction: Optional[Vector] = Field(None, description=(
         "traction [Pa] on the body's upper face along the last axis, one value (normal, along the last axis) "
         "or one per axis; spread over the top particle layer, 000 Eq. (20)"))
@@ -118,6 +121,26 @@ class Body(Strict):
                 raise ValueError("a cylinder body needs center and radius")
             if self.lower is not None or self.upper is not None:
                 raise ValueError("a cylinder body takes center, radius and length, not lower/upper")
+        if self.supports and self.prescribed:
+            raise ValueError("supports: a prescribed (driven) body moves whole; it cannot also be clamped")
+        return self
+
+
+class Support(Strict):
+    """A clamp: the body's particles inside the box [lower, upper] are held at rest (zero prescribed
+    velocity, all components; the grid nodes they touch take it), as a bolted or welded edge is in a test
+    rig, the *BOUNDARY_SPC of a node set in LS-DYNA."""
+
+    lower: list[float] = Field(min_length=1, max_length=3, description="support box lower corner [m]")
+    upper: list[float] = Field(min_length=1, max_length=3, description="support box upper corner [m]")
+
+    @model_validator(mode="after")
+    def _box(self):
+        if len(self.lower) != len(self.upper):
+            raise ValueError("support lower and upper need the same number of coordinates")
+        for ax, lo, hi in zip(AXES, self.lower, self.upper):
+            if not hi > lo:
+                raise ValueError(f"support upper[{ax}] ({hi}) must exceed lower[{ax}] ({lo})")
         return self
 
 
@@ -147,9 +170,15 @@ class MPMNumerics(SharedNumerics):
         "particle pool size (default: the particles the bodies create)"))
 
 
-class MPMOutput(Output):
+class Tracers(Strict):
+    """Points of the structures whose displacement history is recorded (a plate's centre, a slab's back face)."""
+
     tracers: list[list[float]] = Field(default_factory=list, max_length=100, description=(
         "points [m] whose displacement history is recorded: the particle nearest to each at t = 0"))
+
+
+class MPMOutput(Output, Tracers):
+    pass
 
 
 class MPMSweep(Sweep):
@@ -198,6 +227,9 @@ class MPMScenario(ScenarioBase):
                 value = getattr(b, name)
                 if value is not None and len(value) != nd:
                     raise ValueError(f"{key}.{name}: expected {nd} coordinate(s), got {len(value)}")
+            for j, sup in enumerate(b.supports):
+                if len(sup.lower) != nd:
+                    raise ValueError(f"{key}.supports[{j}]: expected {nd} coordinate(s), got {len(sup.lower)}")
             if b.shape == "cylinder":
                 if nd == 1:
                     raise ValueError(f"{key}.shape: a cylinder needs a 2D or 3D grid")

@@ -117,6 +117,7 @@ def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
     by :func:`build`)."""
     data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
                                   "time", "output"})
+    del data["output"]["tracers"]  # (the structures' points, resolved by _structures)
     euler_cfl = sc.numerics.euler_cfl or sc.numerics.cfl  # (euler_cfl > 0 when set)
     data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "limiter": sc.numerics.limiter,
                                           "cfl": euler_cfl, "precision": sc.numerics.precision})
@@ -129,16 +130,17 @@ def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
 
 
 def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
-    """(names, models, params, particles, body) of the structures on the MPM grid."""
+    """(names, models, params, particles, body, tracers, clamped) of the structures on the MPM grid: tracers
+    the index of each output.tracers particle, clamped whether some structure has supports."""
     if not sc.structures:
-        return [], [], [], None, np.zeros(0, int)
+        return [], [], [], None, np.zeros(0, int), (), False
     msc = MPMScenario.model_validate({
         "method": "mpm", "name": sc.name, "time": {"end": sc.time.end},
         "grid": {"lower": list(grid.origin), "upper": list(grid.upper), "cells": grid.cells[0],
                  "axisymmetric": grid.axisymmetric,
                  "boundaries": {a: list(k) for a, k in zip(AXES, faces_kinds)}},
         "bodies": [b.model_dump() for b in sc.structures], "materials": sc.materials,
-        "numerics": {"shape": sc.numerics.shape}})
+        "numerics": {"shape": sc.numerics.shape}, "output": {"tracers": sc.output.tracers}})
     try:
         s = mpm_problem.build(msc)
     except ScenarioError as err:
@@ -146,7 +148,7 @@ def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
     n = s.body.size
     batch = mpm.Particles(*[np.asarray(a)[:n] if not isinstance(a, tuple) else type(a)(*[np.asarray(b)[:n] for b in a])
                             for a in s.particles])
-    return list(s.materials), list(s.models), list(s.model_params), batch, s.body
+    return list(s.materials), list(s.models), list(s.model_params), batch, s.body, s.tracers, s.prescribed
 
 
 def build(sc: CfdmpScenario) -> Setup:
@@ -200,7 +202,7 @@ def build(sc: CfdmpScenario) -> Setup:
         core &= (i >= c_lo) & (i < c_hi)
         clear &= (i >= c_lo + FICTITIOUS_DEPTH * coupled[ax][0]) & (i < c_hi - FICTITIOUS_DEPTH * coupled[ax][1])
 
-    names, models, params, structures, body = _structures(sc, grid, kinds)
+    names, models, params, structures, body, tracers, clamped = _structures(sc, grid, kinds)
     box_lower = np.array([g.lower[ax] + lo[ax] * dx for ax in range(nd)])
     box_upper = np.array([g.lower[ax] + hi[ax] * dx for ax in range(nd)])
     if structures is not None:
@@ -352,7 +354,7 @@ def build(sc: CfdmpScenario) -> Setup:
                 gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape, mpm_cfl=sc.numerics.cfl,
                 q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
                 pic_fraction=[sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))],
-                pressure_relaxation=sc.numerics.pressure_relaxation)
+                pressure_relaxation=sc.numerics.pressure_relaxation, tracers=list(tracers), clamped=bool(clamped))
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
                  int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, ring_volume, ring_half,
                  cell_volume,

@@ -117,6 +117,20 @@ def _fill(grid: mpm.Grid, lower, upper, per_cell: int, key: str):
     return mpm.lattice(grid, np.clip(lower, g_lo, g_hi), np.clip(upper, g_lo, g_hi), per_cell)
 
 
+def _clamped(body, x: np.ndarray, key: str, d: int) -> np.ndarray:
+    """Which of the body's particles lie in one of its support boxes; a support holding none is an error."""
+    held = np.zeros(len(x), bool)
+    for j, sup in enumerate(body.supports):
+        inside = np.all((x[:, :d] >= np.asarray(sup.lower)) & (x[:, :d] <= np.asarray(sup.upper)), axis=1)
+        if not inside.any():
+            raise ScenarioError(f"{key}.supports[{j}]: the box [{sup.lower}, {sup.upper}] m holds no particle of "
+                                f"the body; it must overlap the body by at least half a particle spacing")
+        held |= inside
+    if held.all():
+        raise ScenarioError(f"{key}.supports: the supports hold the whole body; clamp only part of it")
+    return held
+
+
 def _initial_gas_state(material, density, pressure, key: str):
     """(density, specific energy, pressure) of a gas body."""
     rho = material.density if density is None else density
@@ -179,10 +193,15 @@ def build(sc: MPMScenario) -> Setup:
             traction[:d] = _vector(b.top_traction, d, f"{key}.top_traction", along_last=True)
             top = x[:, d - 1] > np.max(x[:, d - 1]) - 0.5 * s
             load = np.where(top[:, None], mpm.surface_load(traction, s), 0.0)
-        batches.append(dict(x=x, volume=vol, density=rho, v=v, material=mat_index, half_size=half, stress=stress,
-                            energy=energy, prescribed=v if b.prescribed else None, surface_load=load))
-        body_ids.append(np.full(len(vol), k))
-        spacings.append(np.full(len(vol), s))
+        clamped = _clamped(b, x, key, d)
+        for part in ((~clamped, clamped) if clamped.any() else (np.ones(len(vol), bool),)):
+            held = part is clamped
+            batches.append(dict(x=x[part], volume=vol[part], density=rho, v=np.zeros_like(v[part]) if held else v[part],
+                                material=mat_index, half_size=half[part], stress=stress, energy=energy,
+                                prescribed=(np.zeros_like(v[part]) if held else (v[part] if b.prescribed else None)),
+                                surface_load=None if load is None else load[part]))
+            body_ids.append(np.full(int(part.sum()), k))
+            spacings.append(np.full(int(part.sum()), s))
         extents.append(float(upper[0] - lower[0]))
 
     imp = sc.impactor
@@ -247,6 +266,7 @@ def build(sc: MPMScenario) -> Setup:
             "models": [m.name for m in models], "shape": sc.numerics.shape,
             "numerics": {k: getattr(sc.numerics, k) for k in ("cfl", "q_quadratic", "q_linear")},
             "gravity": list(sc.gravity) or [0.0] * d,
+            "driven": any(b.prescribed for b in sc.bodies),
             "bodies": [{"material": (sc.bodies[k].material if k < len(sc.bodies) else imp.material),
                         "particles": int(np.sum(body == k)), "mass": float(np.sum(mass[body == k])),
                         "wave_speed": float(np.max(speeds[body == k]))}
@@ -255,4 +275,4 @@ def build(sc: MPMScenario) -> Setup:
     if sine:  # fixed-free bar, first mode: T = 4 L / c (c the longitudinal wave speed)
         info["period_theory"] = 4.0 * extents[sine[0]] / info["bodies"][sine[0]]["wave_speed"]
     return Setup(grid, tuple(names), models, tuple(params), pool, body, spacing, tuple(tracers), gauges,
-                 any(b.prescribed for b in sc.bodies), info)
+                 any(b.prescribed or b.supports for b in sc.bodies), info)
