@@ -216,20 +216,10 @@ def test_steps_split_each_sample_interval_into_equal_steps():
     """A stable step of 0.3 and samples every 1.0: each interval takes ceil(1 / 0.3) = 4 steps of 0.25 (not
     three of 0.3 and a short one: a modulated dt pumps an explicit integrator's fast modes, blastfsi.timeloop),
     and every sample lands on its time."""
-    class Clocked(NamedTuple):
-        log: jnp.ndarray
-        t: jnp.ndarray
-        dt_prev: jnp.ndarray
-        dt0: jnp.ndarray
-        step: jnp.ndarray
-        fault: jnp.ndarray
-        hist: jnp.ndarray
-        hist_next: jnp.ndarray
-
-    state = Clocked(jnp.zeros(32), **timeloop.clock(4, 1, jnp.float64))
+    state = DecayState(jnp.zeros(32), **timeloop.clock(4, 1, jnp.float64))  # y: the log of the steps
     out = timeloop.run_until(state, 3.0, 100, 1.0, 1e-6, stable_dt=lambda s: jnp.asarray(0.3),
-                             step=lambda s, dt: s._replace(log=s.log.at[s.step].set(dt)),
+                             step=lambda s, dt: s._replace(y=s.y.at[s.step].set(dt)),
                              history_row=lambda s: s.t[None])
     assert int(out.step) == 12
-    np.testing.assert_allclose(np.asarray(out.log[:12]), 0.25, rtol=1e-14)
+    np.testing.assert_allclose(np.asarray(out.y[:12]), 0.25, rtol=1e-14)
     np.testing.assert_array_equal(np.asarray(out.hist[:, 0]), [0.0, 1.0, 2.0, 3.0])

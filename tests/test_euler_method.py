@@ -1,7 +1,6 @@
 """The euler method through the one driver and the public API: Sod against the exact
 solution, fields and ParaView output read back with vtk, restart bit for bit, ensembles,
 gauges, and malformed multi-D scenarios rejected with the key named."""
-import json
 import subprocess
 import sys
 

@@ -155,6 +155,20 @@ def cells_along(lower, upper, cells_x: int, key: str) -> tuple[float, tuple[int,
     return dx, tuple(counts)
 
 
+AXES = ("x", "y", "z")
+
+
+def check_box(lower, upper, key: str) -> None:
+    """A box [lower, upper]: as many coordinates in both corners, upper above lower on every axis (errors name
+    ``key``, e.g. "domain")."""
+    if len(lower) != len(upper):
+        raise ValueError(f"{key}.lower and {key}.upper need the same number of coordinates, got {len(lower)} "
+                         f"and {len(upper)}")
+    for ax, lo, hi in zip(AXES, lower, upper):
+        if not hi > lo:
+            raise ValueError(f"{key}.upper[{ax}] ({hi}) must exceed {key}.lower[{ax}] ({lo})")
+
+
 def gauge_points(gauges: list, ndim: int, lower, upper) -> list[tuple]:
     """The gauges as ndim-tuples, each checked to lie in the box [lower, upper]
     (per-axis sequences); a ValueError names the gauge and the domain's extent."""

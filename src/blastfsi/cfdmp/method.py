@@ -23,7 +23,7 @@ from blastfsi.cfdmp import coupling as cp
 from blastfsi.cfdmp.scenario import CfdmpScenario
 from blastfsi.diagnostics import blast_maps
 from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
-from blastfsi.euler.scenario import AXES
+from blastfsi.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_summary

@@ -14,9 +14,9 @@ from typing import Literal, Optional
 
 from pydantic import Field, model_validator
 
-from blastfsi.euler.scenario import AXES, Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_plot_plane
+from blastfsi.euler.scenario import Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_plot_plane
 from blastfsi.mpm.scenario import Body, MPMNumerics, Tracers
-from blastfsi.scenario import ScenarioBase, Strict
+from blastfsi.scenario import AXES, ScenarioBase, Strict, check_box
 
 # Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
 # read when updating the bridge: the fictitious cells of 000 Eqs. (31)-(36). Structures stay beyond them.
@@ -37,11 +37,7 @@ class MPMRegion(Strict):
 
     @model_validator(mode="after")
     def _box(self):
-        if len(self.lower) != len(self.upper):
-            raise ValueError("mpm_region.lower and mpm_region.upper need the same number of coordinates")
-        for ax, lo, hi in zip(AXES, self.lower, self.upper):
-            if not hi > lo:
-                raise ValueError(f"mpm_region.upper[{ax}] ({hi}) must exceed mpm_region.lower[{ax}] ({lo})")
+        check_box(self.lower, self.upper, "mpm_region")
         return self
 
 

@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from blastfsi.detonation import remap as rm
-from blastfsi.euler.scenario import AXES
+from blastfsi.scenario import AXES
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
 from blastfsi.problems.detonation import EXPLOSIVES, charge_mass, charge_radius

@@ -119,7 +119,6 @@ def _bins(profile: Profile1D, r_max: float, min_width: float):
         cuts.pop()
     cuts.append(n)
     starts = np.asarray(cuts[:-1])
-    stops = np.asarray(cuts[1:])
     tot = [np.add.reduceat(q[:n], starts) for q in (profile.mass, profile.products, profile.momentum, profile.energy)]
     return edges[np.r_[starts, n]], tot, is_prod[starts]
 

@@ -11,7 +11,8 @@ import numpy as np
 from blastfsi import euler as kernels
 from blastfsi import timeloop
 from blastfsi.diagnostics import blast_maps
-from blastfsi.euler.scenario import AXES, EulerScenario
+from blastfsi.euler.scenario import EulerScenario
+from blastfsi.scenario import AXES
 from blastfsi.method import Grid, register
 from blastfsi.problems import euler as problem
 

@@ -18,10 +18,9 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import Field, model_validator
 
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, gauge_points
+from blastfsi.scenario import AXES, Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
 
 Vector = Union[float, list[float]]
-AXES = ("x", "y", "z")
 Limiter = Literal["van-leer", "minmod", "mc"]  # numerics.limiter of hllc-muscl (euler and cfdmp methods)
 BOUNDARY_KINDS = ("outflow", "wall", "symmetry", "axis", "periodic")
 
@@ -102,12 +101,7 @@ class Domain(Strict):
 
     @model_validator(mode="after")
     def _box(self):
-        if len(self.lower) != len(self.upper):
-            raise ValueError(f"domain.lower and domain.upper need the same number of axes "
-                             f"({len(self.lower)} vs {len(self.upper)})")
-        for ax, lo, hi in zip(AXES, self.lower, self.upper):
-            if not hi > lo:
-                raise ValueError(f"domain.upper[{ax}] ({hi}) must exceed domain.lower[{ax}] ({lo})")
+        check_box(self.lower, self.upper, "domain")
         ndim = len(self.lower)
         need = {"cylindrical": 1, "spherical": 1, "axisymmetric": 2}.get(self.geometry)
         if need is not None and ndim != need:

@@ -35,7 +35,8 @@ import numpy as np
 from blastfsi import mpm, timeloop
 from blastfsi.method import Particles, register
 from blastfsi.mpm import relaxation
-from blastfsi.mpm.scenario import AXES, MPMScenario
+from blastfsi.mpm.scenario import MPMScenario
+from blastfsi.scenario import AXES
 from blastfsi.problems import mpm as problem
 
 VOIGT_TO_TENSOR = np.array([[0, 5, 4], [5, 1, 3], [4, 3, 2]])  # Voigt [xx, yy, zz, yz, xz, xy] -> 3 x 3

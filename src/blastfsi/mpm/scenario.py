@@ -30,10 +30,9 @@ from pydantic import Field, field_validator, model_validator
 
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, gauge_points
+from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
 
 Vector = Union[float, list[float]]
-AXES = ("x", "y", "z")
 FaceKind = Literal["free", "slip", "fixed"]
 FacePair = Annotated[list[FaceKind], Field(min_length=2, max_length=2)]
 
@@ -55,12 +54,7 @@ class GridSpec(Strict):
 
     @model_validator(mode="after")
     def _box(self):
-        if len(self.lower) != len(self.upper):
-            raise ValueError(f"grid.lower and grid.upper need the same number of coordinates, got "
-                             f"{len(self.lower)} and {len(self.upper)}")
-        for ax, lo, hi in zip(AXES, self.lower, self.upper):
-            if not hi > lo:
-                raise ValueError(f"grid.upper[{ax}] ({hi}) must exceed grid.lower[{ax}] ({lo})")
+        check_box(self.lower, self.upper, "grid")
         if self.axisymmetric and self.ndim != 2:
             raise ValueError(f"grid.axisymmetric needs a 2D (r, z) grid, got {self.ndim} axis/axes")
         if self.axisymmetric and self.lower[0] < 0.0:
@@ -111,11 +105,7 @@ class Body(Strict):
                 raise ValueError("a box body needs lower and upper")
             if any(k is not None for k in (self.center, self.radius, self.length)):
                 raise ValueError("a box body takes lower and upper, not center/radius/length")
-            if len(self.lower) != len(self.upper):
-                raise ValueError("body lower and upper need the same number of coordinates")
-            for ax, lo, hi in zip(AXES, self.lower, self.upper):
-                if not hi > lo:
-                    raise ValueError(f"body upper[{ax}] ({hi}) must exceed lower[{ax}] ({lo})")
+            check_box(self.lower, self.upper, "body")
         else:
             if self.center is None or self.radius is None:
                 raise ValueError("a cylinder body needs center and radius")
@@ -136,11 +126,7 @@ class Support(Strict):
 
     @model_validator(mode="after")
     def _box(self):
-        if len(self.lower) != len(self.upper):
-            raise ValueError("support lower and upper need the same number of coordinates")
-        for ax, lo, hi in zip(AXES, self.lower, self.upper):
-            if not hi > lo:
-                raise ValueError(f"support upper[{ax}] ({hi}) must exceed lower[{ax}] ({lo})")
+        check_box(self.lower, self.upper, "support")
         return self
 
 

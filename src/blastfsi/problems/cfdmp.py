@@ -31,7 +31,8 @@ from blastfsi.constitutive import get as get_model
 from blastfsi.euler import geometry
 from blastfsi.euler.config import Config as EulerConfig
 from blastfsi.euler.method import GEOMETRY_CODE
-from blastfsi.euler.scenario import AXES, EulerScenario
+from blastfsi.euler.scenario import EulerScenario
+from blastfsi.scenario import AXES
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.mpm.scenario import MPMScenario
 from blastfsi.problems import euler as euler_problem

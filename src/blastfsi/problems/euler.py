@@ -9,7 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from blastfsi.euler.scenario import AXES, EulerScenario
+from blastfsi.euler.scenario import EulerScenario
+from blastfsi.scenario import AXES
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import JWLExplosive
 from blastfsi.scenario import ScenarioError, cells_along

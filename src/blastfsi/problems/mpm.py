@@ -18,7 +18,8 @@ from blastfsi.constitutive import get as get_model
 from blastfsi.constitutive import models as _models  # noqa: F401  (registers the constitutive models)
 from blastfsi.eos import jwl
 from blastfsi.materials import MaterialError, lookup
-from blastfsi.mpm.scenario import AXES, MPMScenario
+from blastfsi.mpm.scenario import MPMScenario
+from blastfsi.scenario import AXES
 from blastfsi.scenario import ScenarioError, cells_along
 
 FLUID = "fluid"
