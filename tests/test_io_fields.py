@@ -414,3 +414,16 @@ def test_plot_particle_damage_writes_png(tmp_path, ndim):
     assert len(np.unique(picture[..., :3].reshape(-1, 3), axis=0)) > (10 if ndim == 1 else 100)
     with pytest.raises(ValueError, match="positions must be"):
         plot_particle_damage(png, positions, damage[:-1], cell_size=0.1)
+
+
+def test_tracer_histories_plot(tmp_path):
+    from blastfsi.plotting.histories import tracer_histories
+
+    t = np.linspace(0.0, 1e-3, 101)
+    hist = {"time": t, "tracer0_displacement_x": 0.0 * t, "tracer0_displacement_y": 0.02 * np.sin(3e3 * t)}
+    png = tmp_path / "tracers.png"
+    tracer_histories(png, [hist], [[0.0, 0.105]], ("x", "y"))
+    picture = mpimg.imread(png)
+    assert picture.ndim == 3 and picture.shape[0] > 300 and picture.shape[1] > 400
+    with pytest.raises(KeyError, match="tracer1"):
+        tracer_histories(png, [hist], [[0.0, 0.105], [0.1, 0.105]], ("x", "y"))

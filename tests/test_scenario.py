@@ -124,3 +124,12 @@ def test_cli_refuses_an_escaping_name_before_writing_anything(tmp_path, monkeypa
     assert cli.main(["run", str(f)]) == cli.EXIT_SCENARIO
     assert "name" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["evil.toml"] and not (tmp_path.parent / "escaped").exists()
+
+
+def test_every_shipped_example_validates():
+    """The shipped scenarios parse under their method's schema (a typo in an example is caught here, not by
+    the user)."""
+    from blastfsi.api import example_data, example_names
+
+    for name in example_names():
+        assert parse(example_data(name)).name == name

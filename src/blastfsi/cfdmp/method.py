@@ -487,19 +487,21 @@ class Cfdmp:
 
     def plots(self, folder: Path, sc: CfdmpScenario, setups: list, histories: list[dict], members: list[dict],
               finals: list) -> None:
-        """Gauge overpressures, the final pressure field, the structures' final damage (3D: the particles
-        near the plane output.plot_plane_z), and the budget's residuals."""
+        """Gauge overpressures, tracer displacements, the final pressure field, the structures' final damage
+        (3D: the particles near the plane output.plot_plane_z), and the budget's residuals."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
         from blastfsi.plotting.fields import plot_particle_damage, plot_pressure_field
-        from blastfsi.plotting.histories import gauge_histories
+        from blastfsi.plotting.histories import gauge_histories, tracer_histories
 
         folder.mkdir(parents=True, exist_ok=True)
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+        if sc.output.tracers:
+            tracer_histories(folder / "tracers.png", histories, sc.output.tracers, AXES[:sc.domain.ndim])
         grid = finals[0].grid
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
                             grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s",

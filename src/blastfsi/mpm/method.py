@@ -239,13 +239,19 @@ class MPM:
 
     def plots(self, folder: Path, sc: MPMScenario, setups: list, histories: list[dict], members: list[dict],
               finals: list) -> None:
-        """Energy histories of every member and the final particles of member 0 coloured by pressure."""
+        """Energy histories of every member, tracer displacements and the final particles of member 0
+        coloured by pressure."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
+        from blastfsi.plotting.histories import tracer_histories
+
         folder.mkdir(parents=True, exist_ok=True)
+        if sc.output.tracers:
+            tracer_histories(folder / "tracers.png", histories, sc.output.tracers,
+                             ("r", "z") if sc.grid.axisymmetric else AXES[:sc.grid.ndim])
         fig, ax = plt.subplots(figsize=(6, 4))
         for k, h in enumerate(histories):
             for q in ("kinetic_energy", "internal_energy", "plastic_work"):

@@ -43,3 +43,18 @@ def gauge_histories(file: Path, histories: list[dict], positions: list) -> None:
     fig.tight_layout()
     fig.savefig(file, dpi=120)
     plt.close(fig)
+
+
+def tracer_histories(file: Path, histories: list[dict], positions: list, axes) -> None:
+    """Displacement components of each tracer (member 0 of an ensemble) against time, in mm: a plate
+    centre's deflection history, its peak and its permanent set."""
+    hist = histories[0]
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for k, x in enumerate(positions):
+        for a in axes:
+            ax.plot(hist["time"] * 1e3, hist[f"tracer{k}_displacement_{a}"] * 1e3, lw=1.2,
+                    label=f"{_position(x)}, {a}")
+    ax.set_xlabel("time [ms]"), ax.set_ylabel("displacement [mm]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(file, dpi=120)
+    plt.close(fig)
