@@ -26,7 +26,7 @@ from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
 from blastfsi.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
-from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_summary
+from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_row, tracer_summary
 from blastfsi.problems import cfdmp as problem
 
 
@@ -69,7 +69,7 @@ class Static(NamedTuple):
     pool_margin: int  # a growing pool counts as full when fewer slots are free than one step can fill (one
     #                   inflow particle per face cell and material), so no emission is ever refused; 0 for a
     #                   fixed pool, full when an emission did not fit
-    tracers: tuple = ()  # structure particle of each output.tracers point
+    tracers: tuple  # structure particle of each output.tracers point
 
 
 def _pool_margin(setup: problem.Setup) -> int:
@@ -312,7 +312,7 @@ class Cfdmp:
                 disp = jnp.where(on, jnp.linalg.norm(P.x[:nst] - params.structure_x0, axis=1), 0.0)
                 row += [jnp.max(disp), jnp.max(jnp.where(on, P.point.damage[:nst], 0.0)),
                         jnp.max(jnp.where(on, P.point.plastic_strain[:nst], 0.0))]
-            row += list((P.x[tracers, :d] - params.structure_x0[tracers, :d]).reshape(-1))
+            row += tracer_row(P, tracers, params.structure_x0[tracers], d)
             flat = [prim["pressure"][gauges] - params.reference_pressure, prim["rho"][gauges]]
             flat += [prim["velocity"][k][gauges] for k in range(d)]
             return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])

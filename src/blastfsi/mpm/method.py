@@ -81,6 +81,11 @@ def tracer_columns(n: int, axes) -> list:
     return [(f"tracer{k}_displacement_{a}", "m") for k in range(n) for a in axes]
 
 
+def tracer_row(P, tracers, x0, d: int) -> list:
+    """History entries of the tracer particles ``tracers``: displacement from x0 (T, 3), d components each."""
+    return list((P.x[tracers, :d] - x0[:, :d]).reshape(-1))
+
+
 def tracer_summary(hist: dict, n: int, axes) -> dict:
     """Per tracer and axis the final displacement and the peak one (the signed value of largest magnitude
     over the history: a plate's maximum deflection, where the final one is its permanent set)."""
@@ -138,7 +143,7 @@ class MPM:
             tot = mpm.totals(P)
             e = mpm.energies(s.mpm)
             row = [s.t, tot.kinetic, tot.internal, tot.plastic, e["external_work"], tot.mass, *tot.momentum[:d]]
-            row += list((P.x[tracers, :d] - params.tracer_x0[:, :d]).reshape(-1))
+            row += tracer_row(P, tracers, params.tracer_x0, d)
             if params.gauges.shape[0]:
                 dist = jnp.linalg.norm(P.x[None, :, :d] - params.gauges[:, None, :d], axis=2)
                 dist = jnp.where(P.active[None, :], dist, jnp.inf)

@@ -195,12 +195,14 @@ def build(sc: MPMScenario) -> Setup:
             top = x[:, d - 1] > np.max(x[:, d - 1]) - 0.5 * s
             load = np.where(top[:, None], mpm.surface_load(traction, s), 0.0)
         clamped = _clamped(b, x, key, d)
-        for part in ((~clamped, clamped) if clamped.any() else (np.ones(len(vol), bool),)):
-            held = part is clamped
-            batches.append(dict(x=x[part], volume=vol[part], density=rho, v=np.zeros_like(v[part]) if held else v[part],
-                                material=mat_index, half_size=half[part], stress=stress, energy=energy,
-                                prescribed=(np.zeros_like(v[part]) if held else (v[part] if b.prescribed else None)),
-                                surface_load=None if load is None else load[part]))
+        free = ~clamped
+        parts = [(free, dict(v=v[free], prescribed=v[free] if b.prescribed else None))]
+        if clamped.any():  # held at rest: a zero prescribed velocity (a batch of its own)
+            parts.append((clamped, dict(v=None, prescribed=np.zeros((int(clamped.sum()), 3)))))
+        for part, motion in parts:
+            batches.append(dict(x=x[part], volume=vol[part], density=rho, material=mat_index, half_size=half[part],
+                                stress=stress, energy=energy, surface_load=None if load is None else load[part],
+                                **motion))
             body_ids.append(np.full(int(part.sum()), k))
             spacings.append(np.full(int(part.sum()), s))
         extents.append(float(upper[0] - lower[0]))
