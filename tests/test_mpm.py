@@ -161,6 +161,8 @@ def test_solver_rejects_bad_input():
         mpm.make_params((elastic_params(),), q_linear=-0.1)
     with pytest.raises(mpm.MPMError, match="numerics.pic_fraction"):
         mpm.make_params((elastic_params(),), pic_fraction=1.5)
+    with pytest.raises(mpm.MPMError, match="numerics.reference_pressure"):
+        mpm.make_params((elastic_params(),), reference_pressure=-1.0e5)
     with pytest.raises(mpm.ParticleError, match="smaller than one particle spacing"):
         mpm.lattice(grid, (1.0,), (1.1,), 2)
     with pytest.raises(mpm.ParticleError, match="leaves the grid"):

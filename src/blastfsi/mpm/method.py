@@ -116,7 +116,8 @@ class MPM:
     def params(self, setup: problem.Setup, dtype) -> Params:
         sc = setup.info["numerics"]
         prm = mpm.make_params(setup.model_params, cfl=sc["cfl"], q_quadratic=sc["q_quadratic"],
-                              q_linear=sc["q_linear"], gravity=tuple(setup.info["gravity"]), dtype=dtype)
+                              q_linear=sc["q_linear"], gravity=tuple(setup.info["gravity"]),
+                              reference_pressure=sc["reference_pressure"], dtype=dtype)
         x0 = np.asarray(setup.particles.x)[list(setup.tracers)].reshape(-1, 3)
         return Params(_cast(prm, dtype), jnp.asarray(x0, dtype), jnp.asarray(_pad3(setup.gauges), dtype))
 

@@ -4,8 +4,9 @@ One step of length dt (all particle loops are whole-array operations):
 
 1. P2G of every transferred quantity at once: nodal mass (Eq. 21), momentum
    (Eq. 18), internal force (Eq. 19, with the artificial bulk viscosity q
-   added to the pressure; gas particles on a 2D/3D linear grid take the
-   gradient at their cell's centre, :func:`cell_centre_gradient`) and
+   added to the pressure and the reference pressure p_ref taken out, sigma +
+   p_ref I; gas particles on a 2D/3D linear grid take the gradient at their
+   cell's centre, :func:`cell_centre_gradient`) and
    prescribed traction (Eq. 20), as one combined
    scatter (GPU) or one fused scalar scatter per channel (CPU, see
    :func:`particle_to_grid`); body force m_I b on the grid (first term of Eq. 20).
@@ -61,8 +62,20 @@ Energy: ``point.energy`` is the specific internal energy (stress work from the
 model plus q work); kinetic + internal is conserved up to the scheme's
 dissipation (FLIP/MUSL and the grid's contact) when no external work is done.
 ``State.external_work`` accumulates the work of body force and traction
-sum_p (m_p b + V_p t_p / h) . dx_p; face conditions and prescribed velocities
-are not counted. ``plastic_work`` accumulates sigma_eq d(eps_p)/rho per particle,
+sum_p (m_p b + V_p t_p / h) . dx_p and that of the atmosphere, -p_ref dV with
+V = sum_p m_p / rho_p; face conditions and prescribed velocities are not counted.
+
+Reference pressure (``Params.reference_pressure``, 0 by default): the model sits
+in an atmosphere at p_ref. A constant isotropic stress has no divergence, so
+taking it out of Eq. (19) changes nothing inside the continuum; at the model's
+free faces it applies p_ref. In the discrete force it removes the particle
+quadrature's error on p_ref: a gas at p_ref then exerts exactly no force however
+its particles sit, which (i) removes the negative stiffness a uniform pressure
+has through the particles' motion in the gradient (growth ~1.05 per step for a
+GIMP air box at rest; :func:`cell_centre_gradient` for the linear grid), and
+(ii) restores the sound speed of sub-cell motion on a linear grid, K instead of
+K - p (air column: 1.86 -> 1.0005 x 2 L / c, tests/test_mpm_method.py).
+What remains is the same mechanism at the overpressure |p - p_ref|. ``plastic_work`` accumulates sigma_eq d(eps_p)/rho per particle,
 the plastic dissipation of a von Mises (J2) radial return (sigma' : d eps_p =
 sigma_eq d eps_p at the returned state); for other yield surfaces it is the
 same J2 measure.
@@ -117,6 +130,7 @@ class Params(NamedTuple):
     q_linear: jnp.ndarray  # C_l of the bulk viscosity, >= 0
     gravity: jnp.ndarray  # (3,) body force per unit mass [m/s^2]
     pic_fraction: jnp.ndarray  # (n_models,) PIC share alpha of each material's G2P velocity, 0 <= alpha <= 1
+    reference_pressure: jnp.ndarray  # p_ref [Pa] of the atmosphere around the model: Eq. (19) with sigma + p_ref I
 
 
 class State(NamedTuple):
@@ -164,9 +178,9 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
 
 
 def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=DEFAULT_LINEAR,
-                gravity=(0.0, 0.0, 0.0), pic_fraction=0.0, dtype=jnp.float64) -> Params:
+                gravity=(0.0, 0.0, 0.0), pic_fraction=0.0, reference_pressure=0.0, dtype=jnp.float64) -> Params:
     """Checked :class:`Params`; ``materials`` the model params in material order; ``pic_fraction`` one
-    value for all materials or one per material."""
+    value for all materials or one per material; ``reference_pressure`` see :func:`step`."""
     pic = np.broadcast_to(np.asarray(pic_fraction, float), (len(materials),))
     if not np.all((pic >= 0.0) & (pic <= 1.0)):
         raise MPMError(f"numerics.pic_fraction: expected 0 <= alpha <= 1, got {pic_fraction!r}")
@@ -175,13 +189,15 @@ def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=D
     for key, value in (("q_quadratic", q_quadratic), ("q_linear", q_linear)):
         if not (np.isfinite(value) and value >= 0.0):
             raise MPMError(f"numerics.{key}: expected a finite value >= 0, got {value!r}")
+    if not (np.isfinite(reference_pressure) and reference_pressure >= 0.0):
+        raise MPMError(f"numerics.reference_pressure: expected a finite pressure >= 0 Pa, got {reference_pressure!r}")
     g = np.zeros(3)
     g[:len(gravity)] = gravity
     if len(gravity) > 3 or not np.all(np.isfinite(g)):
         raise MPMError(f"gravity: expected up to 3 finite components, got {gravity!r}")
     return Params(materials=tuple(materials), cfl=jnp.asarray(cfl, dtype), q_quadratic=jnp.asarray(q_quadratic, dtype),
                   q_linear=jnp.asarray(q_linear, dtype), gravity=jnp.asarray(g, dtype),
-                  pic_fraction=jnp.asarray(pic, dtype))
+                  pic_fraction=jnp.asarray(pic, dtype), reference_pressure=jnp.asarray(reference_pressure, dtype))
 
 
 def _component(stress, i, j):
@@ -414,8 +430,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         grad, w_hoop, r_hoop = cell_centre_gradient(P, grid, config, w, grad, r)
     stress = P.point.stress
 
-    def sigma(i, j):  # q raises the pressure (ERRATA 000-10)
-        return _component(stress, i, j) - (P.q if i == j else 0.0)
+    def sigma(i, j):  # q raises the pressure (ERRATA 000-10); the atmosphere's p_ref is taken out
+        return _component(stress, i, j) + ((params.reference_pressure - P.q) if i == j else 0.0)
 
     # Eq. (19): f_iI = -sum_p V_p sigma_ij dN_I/dx_j ; Eq. (20): + N_I V_p t_i / h
     forces = []
@@ -507,7 +523,9 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         x=x_p, v=v_p, point=point, q=jnp.where(act, q, P.q), vol_rate=jnp.where(act, rate, P.vol_rate),
         wave_speed=jnp.where(act, c, P.wave_speed), plastic_work=jnp.where(act, plastic_work, P.plastic_work))
     load = m[:, None] * params.gravity + vol[:, None] * P.surface_load
-    work = jnp.sum(load * (x_p - P.x))
+    # the atmosphere's work on the model, -p_ref dV, with dV the particles' volume change (Eq. 29)
+    expansion = jnp.sum(jnp.where(act, m / point.density, 0.0)) - jnp.sum(vol)
+    work = jnp.sum(load * (x_p - P.x)) - params.reference_pressure * expansion
     return State(particles=particles, external_work=state.external_work + work)
 
 

@@ -18,7 +18,7 @@ Tables:
   ``particles_per_cell`` particles per cell and direction; ``[[bodies.supports]]``:
   boxes in which the body is clamped (its particles there held at rest);
 * ``[impactor]``: a rod (Taylor bar) striking the lower face of the last axis;
-* ``[numerics]``: shape ("linear" | "gimp"), cfl, bulk-viscosity coefficients, capacity;
+* ``[numerics]``: shape ("linear" | "gimp"), cfl, bulk-viscosity coefficients, capacity, reference_pressure;
 * ``gravity``: body force per unit mass [m/s^2];
 * ``[output]``: the shared keys plus ``tracers``.
 """
@@ -156,6 +156,14 @@ class MPMNumerics(SharedNumerics):
         "particle pool size (default: the particles the bodies create)"))
 
 
+class StandaloneMPMNumerics(MPMNumerics):
+    reference_pressure: float = Field(0.0, ge=0.0, le=1.0e9, description=(
+        "p_ref [Pa] of an atmosphere around the whole model: the internal force takes the stress relative to it "
+        "(sigma + p_ref I), so a gas at p_ref is in equilibrium however its particles sit, and free faces carry "
+        "p_ref; its work -p_ref dV is booked in external_work. Set it to the ambient air's pressure when air "
+        "is modelled: with numerics.shape = 'gimp' an air body at rest is otherwise unstable (docs/cfdmp.md)"))
+
+
 class Tracers(Strict):
     """Points of the structures whose displacement history is recorded (a plate's centre, a slab's back face)."""
 
@@ -184,7 +192,7 @@ class MPMScenario(ScenarioBase):
         default_factory=dict, description="per-material overrides of library constants, e.g. "
                                           "{copper-ofhc = {A = 9.0e7}}")
     gravity: list[float] = Field(default_factory=list, max_length=3, description="body force per unit mass [m/s^2]")
-    numerics: MPMNumerics = MPMNumerics()
+    numerics: StandaloneMPMNumerics = StandaloneMPMNumerics()
     output: MPMOutput = MPMOutput()
     sweep: Optional[MPMSweep] = None
 

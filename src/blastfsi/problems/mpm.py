@@ -267,7 +267,7 @@ def build(sc: MPMScenario) -> Setup:
                         .particles.wave_speed)[:n]
     info = {"cell_size": grid.cell_size, "grid_cells": list(grid.cells), "materials": names,
             "models": [m.name for m in models], "shape": sc.numerics.shape,
-            "numerics": {k: getattr(sc.numerics, k) for k in ("cfl", "q_quadratic", "q_linear")},
+            "numerics": {k: getattr(sc.numerics, k) for k in ("cfl", "q_quadratic", "q_linear", "reference_pressure")},
             "gravity": list(sc.gravity) or [0.0] * d,
             "driven": any(b.prescribed for b in sc.bodies),
             "bodies": [{"material": (sc.bodies[k].material if k < len(sc.bodies) else imp.material),
