@@ -236,7 +236,7 @@ def view(U, rows, gas_mass, layout: Layout):
     return jnp.where(layout.fictitious & (gas_mass > 0.0), rows, U)
 
 
-def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, stencil=None) -> mpm.musl.NodalSource:
+def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, stencil=None) -> mpm.musl.NodalSource:
     """The gas beyond the box faces that lie on an outflow face of the domain, on those faces' MPM nodes:
     it continues the gas inside (zero gradient, like the Eulerian outflow ghost cells) instead of the vacuum a
     free MPM face would be. The particles give such a node only the half of its support inside the box; the
@@ -262,8 +262,9 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, stencil=None
     mirror on inflow nodes: below 16 km/s, steps of ~50 ns). The mirror is therefore scaled by
     clip(1 + u_n / (INFLOW_MACH c), 0, 1), u_n the node's outward velocity and c its mass-weighted sound
     speed: whole for outflow and rest, gone for inflow faster than INFLOW_MACH c (the node is then a free
-    face), linear between (no switching). ``stencil``: the particles' (idx, w) when the caller has them (the
-    MUSL step's own, see mpm.musl.step)."""
+    face), linear between (no switching). ``reference``: the MPM step's reference pressure (the traction
+    is that of p_I - p_ref, as the particles' force). ``stencil``: the particles' (idx, w) when the caller
+    has them (the MUSL step's own, see mpm.musl.step)."""
     cfg = static.mpm
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
@@ -287,12 +288,13 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, stencil=None
     share = jnp.where(ok, jnp.clip(1.0 + outward / (INFLOW_MACH * jnp.where(ok, mc_node, 1.0)), 0.0, 1.0), 1.0)
     # a node on k such faces gets 1 / 2^k of its support from the particles: the mirrors add 2^k - 1 times that
     mirrors = share * (2.0 ** jnp.sum(layout.outflow_area != 0.0, axis=1) - 1.0)
-    return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * momentum,
-                                (share * p_node)[:, None] * layout.outflow_area)
+    traction = jnp.where(v_node > 0.0, share * (p_node - reference), 0.0)
+    return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * momentum, traction[:, None] * layout.outflow_area)
 
 
-def interface_source(prim_flat: dict, layout: Layout, static: Static):
-    """000 Eqs. (37)-(39): the ring cells as particles of mass rho V and stress -p I; plus the outflow
+def interface_source(prim_flat: dict, layout: Layout, static: Static, reference):
+    """000 Eqs. (37)-(39): the ring cells as particles of mass rho V and stress -p I (their force, like the
+    particles', from p - p_ref, ``reference`` the MPM step's reference pressure); plus the outflow
     gas of :func:`outflow_ghost` beyond box faces that lie on outflow faces of the domain. Returns the
     source as a function of the particles and their stencil, which the MUSL step calls with its own."""
     grid = static.mpm.grid
@@ -300,7 +302,7 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static):
     V = layout.ring_volume
     rho = prim_flat["rho"][layout.ring_cells]
     vel = prim_flat["velocity"][:, layout.ring_cells]
-    p = prim_flat["pressure"][layout.ring_cells]
+    p = prim_flat["pressure"][layout.ring_cells] - reference
     idx = layout.ring_idx.reshape(-1)
 
     def scatter(values):
@@ -314,7 +316,7 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static):
         force[0] = force[0] + scatter(w * (p * V / layout.ring_radius))
     force = jnp.stack(force, axis=1)
     def source(P: mpm.Particles, idx, w) -> mpm.musl.NodalSource:
-        ghost = outflow_ghost(P, layout, static, (idx, w))
+        ghost = outflow_ghost(P, layout, static, reference, (idx, w))
         return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force)
 
     return source

@@ -5,7 +5,9 @@ Before activation only the Eulerian solver runs, over the whole domain; when the
 bordering the MPM box exceeds ``mpm_region.activation_overpressure`` the gas of the box becomes particles
 (:func:`coupling.activate`) and every later step is the coupled step of 000 Sec. 3.5. The history books the
 conservation budget of the coupled system: Eulerian-only cells + particles + reservoirs + what left through
-the domain boundary, against its value at activation.
+the domain boundary, against its value at activation. The MPM region's force takes the stresses relative to
+the ambient pressure (``numerics.reference_pressure``; the particles' and the Eulerian ring cells' alike, so a
+uniform pressure still balances exactly).
 """
 from __future__ import annotations
 
@@ -154,7 +156,7 @@ class Cfdmp:
         grid = setup.grid
         kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype))
         mp = mpm.make_params(setup.model_params, cfl=info["mpm_cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
-                             pic_fraction=info["pic_fraction"], dtype=dtype)
+                             pic_fraction=info["pic_fraction"], reference_pressure=info["mpm_reference_pressure"], dtype=dtype)
         shape = mpm.SHAPES[info["shape_functions"]]
         if setup.ring_cells.size:
             ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(setup.ring_half, dtype), grid,
@@ -248,6 +250,7 @@ class Cfdmp:
         gauges = jnp.asarray(static.gauge_cells, jnp.int32)
         tracers = jnp.asarray(static.tracers, jnp.int32)  # (structure slots: never deleted or moved)
         d = len(cfg.shape)
+        pref = params.mpm.reference_pressure
 
         def stable_dt(s):
             dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
@@ -262,7 +265,7 @@ class Cfdmp:
             return s, s.U
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, (idx, w)))
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, pref, (idx, w)))
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
             return s._replace(mpm=ms, reservoirs=res, budget=budget), cp.view(s.U, rows, gas_volume, lay)
@@ -270,7 +273,7 @@ class Cfdmp:
         def coupled(s, dt):
             eos = params.euler.eos
             prim = cp.flat_primitives(s.U, eos, cfg)
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs))
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs, pref))
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
             U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)
