@@ -22,6 +22,14 @@ def test_kb_text_and_surface_burst(capsys):
     assert "scaled_distance" in text and "surface" in text and "Pa" in text
 
 
+def test_kb_close_in_says_which_fit_does_not_hold(capsys):
+    """seed 000 Sec. 5.4 case 1: 0.468 kg at 0.1 m, Z = 0.129 m/kg^(1/3), below the duration's fit only."""
+    assert cli.main(["kb", "--mass", "0.468", "--distance", "0.1"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()}
+    assert "n/a" in lines["positive_phase_duration"] and "0.147 <= Z" in lines["positive_phase_duration"]
+    assert "Pa*s" in lines["reflected_impulse"] and "n/a" not in lines["reflected_impulse"]
+
+
 @pytest.mark.parametrize("args,fragment", [(["--mass", "1", "--distance", "100"], "validity range"),
                                           (["--mass", "0", "--distance", "1"], "mass must be > 0"),
                                           (["--mass", "-2", "--distance", "1"], "mass must be > 0")])

@@ -57,9 +57,13 @@ def _kb(args) -> int:
     if args.json:
         print(json.dumps(report))
         return 0
-    units = report.pop("units")
+    units, outside = report.pop("units"), report.pop("out_of_range")
     for key, value in report.items():
-        print(f"{key:28s} {value:.6g} {units.get(key, '')}" if isinstance(value, float) else f"{key:28s} {value}")
+        if key in outside:
+            lo, hi = outside[key]
+            print(f"{key:28s} n/a (Kingery-Bulmash fit valid for {lo:g} <= Z <= {hi:g} m/kg^(1/3))")
+        else:
+            print(f"{key:28s} {value:.6g} {units.get(key, '')}" if isinstance(value, float) else f"{key:28s} {value}")
     return 0
 
 

@@ -265,14 +265,24 @@ def kb_report(mass: float, distance: float, burst: str = "free-air") -> dict:
 
     Returns a flat dict: mass [kg], distance [m], burst, scaled_distance
     [m/kg^(1/3)], and every name of :data:`QUANTITIES` in SI, plus "units"
-    mapping each key to its unit. A scaled distance outside the validity range
-    of any quantity raises ValueError naming Z, the quantity and its range.
+    mapping each key to its unit. A quantity whose validity range does not hold
+    Z is None, with its range [Z_min, Z_max] in "out_of_range" (close-in
+    charges: the reflected impulse holds from Z = 0.0531, the positive phase
+    duration only from 0.147); a Z outside every range raises ValueError naming
+    Z, a quantity and its range.
     """
     _check_burst(burst)
     z = float(scaled_distance(mass, distance))
     report = {"mass": float(mass), "distance": float(distance), "burst": burst, "scaled_distance": z}
+    outside = {}
     for name in QUANTITIES:
-        report[name] = float(value(name, mass, distance, burst))
+        lo, hi = validity_range(name, burst)
+        report[name] = float(value(name, mass, distance, burst)) if lo <= z <= hi else None
+        if report[name] is None:
+            outside[name] = [lo, hi]
+    if len(outside) == len(QUANTITIES):
+        value(next(iter(QUANTITIES)), mass, distance, burst)  # raises, naming Z and the range
+    report["out_of_range"] = outside
     report["units"] = {"mass": "kg", "distance": "m", "scaled_distance": "m/kg^(1/3)",
                        **{name: unit for name, (_, _, unit) in QUANTITIES.items()}}
     return report
