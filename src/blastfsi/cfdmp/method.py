@@ -5,9 +5,9 @@ Before activation only the Eulerian solver runs, over the whole domain; when the
 bordering the MPM box exceeds ``mpm_region.activation_overpressure`` the gas of the box becomes particles
 (:func:`coupling.activate`) and every later step is the coupled step of 000 Sec. 3.5. The history books the
 conservation budget of the coupled system: Eulerian-only cells + particles + reservoirs + what left through
-the domain boundary, against its value at activation. The MPM region's force takes the stresses relative to
-the ambient pressure (``numerics.reference_pressure``; the particles' and the Eulerian ring cells' alike, so a
-uniform pressure still balances exactly).
+the domain boundary, against its value at activation. With ``numerics.reference_pressure`` the MPM region's
+force takes the stresses relative to it (the particles' and the Eulerian ring cells' alike, so a uniform
+pressure still balances exactly).
 """
 from __future__ import annotations
 

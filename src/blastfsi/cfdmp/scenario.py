@@ -65,11 +65,6 @@ class CfdmpNumerics(MPMNumerics):
     gas_pic_fraction: float = Field(GAS_PIC_FRACTION, ge=0.0, le=1.0, description=(
         "PIC share alpha of the gas particles' G2P velocity (FLIP/PIC blend, its kinetic-energy loss heats the "
         "particle; 0: pure FLIP; structures stay FLIP)"))
-    reference_pressure: Optional[float] = Field(None, ge=0.0, le=1.0e9, description=(
-        "p_ref [Pa] of the MPM region's force, sigma + p_ref I, for the particles and the Eulerian cells acting "
-        "as particles alike (see the mpm method's numerics.reference_pressure); default: the ambient gas "
-        "pressure (the overpressure reference), so that the ambient air exerts no force through the particle "
-        "quadrature; 0: absolute stresses"))
     capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
         "fixed particle pool size: the run stops when the bridge needs more (default: a pool of structures + "
         "1.25 x the gas particles of the box that grows as the bridge fills it; with MPM everywhere, which "

@@ -154,14 +154,12 @@ class MPMNumerics(SharedNumerics):
         "same strain, and a products/air contact over-compresses the air"))
     capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
         "particle pool size (default: the particles the bodies create)"))
-
-
-class StandaloneMPMNumerics(MPMNumerics):
     reference_pressure: float = Field(0.0, ge=0.0, le=1.0e9, description=(
         "p_ref [Pa] of an atmosphere around the whole model: the internal force takes the stress relative to it "
-        "(sigma + p_ref I), so a gas at p_ref is in equilibrium however its particles sit, and free faces carry "
-        "p_ref; its work -p_ref dV is booked in external_work. Set it to the ambient air's pressure when air "
-        "is modelled: with numerics.shape = 'gimp' an air body at rest is otherwise unstable (docs/cfdmp.md)"))
+        "(sigma + p_ref I; in cfdmp the Eulerian cells acting as particles too), so a gas at p_ref is in "
+        "equilibrium however its particles sit, and free faces carry p_ref; in mpm its work -p_ref dV is booked "
+        "in external_work. Set it to the ambient air's pressure when air is modelled with particles: with "
+        "numerics.shape = 'gimp' an air body at rest is otherwise unstable (docs/cfdmp.md); 0: absolute stresses"))
 
 
 class Tracers(Strict):
@@ -192,7 +190,7 @@ class MPMScenario(ScenarioBase):
         default_factory=dict, description="per-material overrides of library constants, e.g. "
                                           "{copper-ofhc = {A = 9.0e7}}")
     gravity: list[float] = Field(default_factory=list, max_length=3, description="body force per unit mass [m/s^2]")
-    numerics: StandaloneMPMNumerics = StandaloneMPMNumerics()
+    numerics: MPMNumerics = MPMNumerics()
     output: MPMOutput = MPMOutput()
     sweep: Optional[MPMSweep] = None
 

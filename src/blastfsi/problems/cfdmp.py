@@ -356,8 +356,7 @@ def build(sc: CfdmpScenario) -> Setup:
                 q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
                 pic_fraction=[sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))],
                 pressure_relaxation=sc.numerics.pressure_relaxation, tracers=list(tracers), clamped=bool(clamped),
-                mpm_reference_pressure=(esetup.reference_pressure if sc.numerics.reference_pressure is None
-                                        else sc.numerics.reference_pressure))
+                mpm_reference_pressure=sc.numerics.reference_pressure)
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
                  int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, ring_volume, ring_half,
                  cell_volume,
