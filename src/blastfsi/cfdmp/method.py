@@ -156,7 +156,8 @@ class Cfdmp:
         grid = setup.grid
         kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype))
         mp = mpm.make_params(setup.model_params, cfl=info["mpm_cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
-                             pic_fraction=info["pic_fraction"], reference_pressure=info["mpm_reference_pressure"], dtype=dtype)
+                             pic_fraction=info["pic_fraction"], reference_pressure=info["mpm_reference_pressure"],
+                             dtype=dtype)
         shape = mpm.SHAPES[info["shape_functions"]]
         if setup.ring_cells.size:
             ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(setup.ring_half, dtype), grid,

@@ -75,7 +75,9 @@ has through the particles' motion in the gradient (growth ~1.05 per step for a
 GIMP air box at rest; :func:`cell_centre_gradient` for the linear grid), and
 (ii) restores the sound speed of sub-cell motion on a linear grid, K instead of
 K - p (air column: 1.86 -> 1.0005 x 2 L / c, tests/test_mpm_method.py).
-What remains is the same mechanism at the overpressure |p - p_ref|. ``plastic_work`` accumulates sigma_eq d(eps_p)/rho per particle,
+What remains is the same mechanism at the overpressure |p - p_ref|.
+
+``plastic_work`` accumulates sigma_eq d(eps_p)/rho per particle,
 the plastic dissipation of a von Mises (J2) radial return (sigma' : d eps_p =
 sigma_eq d eps_p at the returned state); for other yield surfaces it is the
 same J2 measure.
