@@ -277,9 +277,10 @@ def kb_report(mass: float, distance: float, burst: str = "free-air") -> dict:
     outside = {}
     for name in QUANTITIES:
         lo, hi = validity_range(name, burst)
-        report[name] = float(value(name, mass, distance, burst)) if lo <= z <= hi else None
-        if report[name] is None:
-            outside[name] = [lo, hi]
+        if lo <= z <= hi:
+            report[name] = float(value(name, mass, distance, burst))
+        else:
+            report[name], outside[name] = None, [lo, hi]
     if len(outside) == len(QUANTITIES):
         value(next(iter(QUANTITIES)), mass, distance, burst)  # raises, naming Z and the range
     report["out_of_range"] = outside
