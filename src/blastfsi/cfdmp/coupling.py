@@ -66,6 +66,8 @@ from blastfsi.euler.mixture import cell_state, cold_terms, eos_rows
 from blastfsi.mpm.musl import wave_speed
 
 INFLOW_MACH = 0.01  # inflow Mach number over which a flow-out face's mirror gas is gone (outflow_ghost)
+FULL_FILL = 0.5  # share of a flow-out face node's half support filled with gas from which its mirror traction
+#                  is whole (outflow_ghost)
 FEED_FRACTION = 1e-6  # smallest reservoir mass that feeds an inflow particle, in gas particles of the bridge cell
 PRESENT = 1e-3  # smallest mass fraction of a material in the bridge cell whose phase density is trusted for it
 
@@ -264,7 +266,16 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     speed: whole for outflow and rest, gone for inflow faster than INFLOW_MACH c (the node is then a free
     face), linear between (no switching). ``reference``: the MPM step's reference pressure (the traction
     is that of p_I - p_ref, as the particles' force). ``stencil``: the particles' (idx, w) when the caller
-    has them (the MUSL step's own, see mpm.musl.step)."""
+    has them (the MUSL step's own, see mpm.musl.step).
+
+    The traction p_I A stands for gas that fills the node's support. Particles whose volumes leave most of
+    it empty (a lone products particle at the edge of the cloud, compressed) push the node with sum_p V_p
+    p_p dN_I/dn only, a fraction phi_I = sum_p N_Ip V_p / (A h / 2) of p_I A: the mirror continues that, so
+    the traction is scaled by clip(phi_I / FULL_FILL, 0, 1) (whole for a node at least half full: a gas
+    that fills space, however it moves, keeps the exact balance of a uniform state). *Found*: in
+    steel-plate-blast with a smaller PIC share for the slow gas (docs/cfdmp.md) a products particle alone
+    by the flow-out face r = 0.3 m (phi ~ 0.02) was kicked back and forth by the whole traction of its own
+    pressure and heated by its compression from 8e7 to 2e10 J/kg in 120 steps until the run stopped."""
     cfg = static.mpm
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
@@ -288,7 +299,8 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     share = jnp.where(ok, jnp.clip(1.0 + outward / (INFLOW_MACH * jnp.where(ok, mc_node, 1.0)), 0.0, 1.0), 1.0)
     # a node on k such faces gets 1 / 2^k of its support from the particles: the mirrors add 2^k - 1 times that
     mirrors = share * (2.0 ** jnp.sum(layout.outflow_area != 0.0, axis=1) - 1.0)
-    traction = jnp.where(v_node > 0.0, share * (p_node - reference), 0.0)
+    filled = jnp.clip(v_node / (FULL_FILL * 0.5 * cfg.grid.cell_size * jnp.where(area > 0.0, area, 1.0)), 0.0, 1.0)
+    traction = jnp.where(v_node > 0.0, share * filled * (p_node - reference), 0.0)
     return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * momentum, traction[:, None] * layout.outflow_area)
 
 
@@ -394,17 +406,24 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     u3 = jnp.zeros((3,) + u.shape[1:], u.dtype).at[:d].set(u)
     res = res._replace(mass=res.mass + m_k.T, momentum=res.momentum + (m_k[:, None, :] * u3[None]).transpose(2, 0, 1),
                        energy=res.energy + carried_e.T)
-    U, res = _settle(U, res, ~inflow, rho_k, lay, layout)  # (outflow faces: the donor is the bridge cell)
+    rho_cell = trusted_phases(prim_flat, layout.face_out, eos, n)[0]  # (the cells the balance settles in)
+    U, res = _settle(U, res, ~inflow, rho_k, rho_cell, lay, layout)  # (outflow faces: the donor is the bridge cell)
     return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
 
 
 SETTLE_FRACTIONS = (1.0, 0.5, 0.25, 0.125)  # shares of an outflow reservoir's balance tried, largest first
 
 
-def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout):
+def _settle(U, res: Reservoirs, outflow, rho_k, rho_cell, lay, layout: Layout):
     """Move the balance of the outflow faces' reservoirs (debt of the scheme's convective transfer plus the
-    deleted particles' content) into the Eulerian cells outside those faces; ``rho_k`` the phase densities of
-    the donor (bridge) cells, for the volume the settled products take.
+    deleted particles' content) into the Eulerian cells outside those faces. The volume a material's
+    settled mass takes: at ``rho_k``, the phase densities of the donor (bridge) cells, where gas arrives; at
+    ``rho_cell``, the receiving cells' own, where a debt takes gas back, so that the cell's phase densities
+    stay as they were. *Found*: a debt taken back at the donor's phase density from a cell whose products
+    were denser removed more products volume than their share: in steel-plate-blast (docs/cfdmp.md) the
+    cell under the box face went from a products phase density of 3 to 2.6e5 kg/m^3 in 20 steps (volume
+    fraction 0.06 -> 2.6e-7 while the products' partial density fell by a third) until its JWL pressure
+    turned negative.
 
     Particles cross a face one at a time, each carrying ~1/ppc^ndim of a bridge cell's mass, while the scheme
     transfers a little every step: settling each step's debt at once (before the particle that repays it has
@@ -436,7 +455,8 @@ def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout):
     moved_m = share[:, None] * res.mass  # (F, n)
     moved_p = share[:, None, None] * res.momentum
     moved_e = share[:, None] * res.energy
-    vol_k = jnp.stack([jnp.where(moved_m[:, k] != 0.0, moved_m[:, k] / rho_k[k], 0.0) for k in range(n)])
+    vol_k = jnp.stack([jnp.where(moved_m[:, k] != 0.0, moved_m[:, k] / jnp.where(moved_m[:, k] > 0.0, rho_k[k],
+                                                                               rho_cell[k]), 0.0) for k in range(n)])
     U = _add_to_cells(U, cells, moved_m.T, jnp.sum(moved_p, axis=1)[:, :d].T, jnp.sum(moved_e, axis=1), vol_k,
                       lay, layout.cell_volume)
     return U, res._replace(mass=res.mass - moved_m, momentum=res.momentum - moved_p, energy=res.energy - moved_e)
