@@ -527,31 +527,3 @@ def test_settled_gas_takes_the_volume_of_where_it_comes_from(arriving):
         phase_p, phase_a = new[0] / new[4], new[1] / (1.0 - new[4])
         assert phase_p / phase_a == pytest.approx(rho_p / rho_a, rel=1e-13)
         assert phase_a == pytest.approx(rho_a * (V + dm / rho_p) / V, rel=1e-13)  # expanded by the volume taken
-
-
-def test_a_debt_settles_only_what_each_material_can_give():
-    """``coupling._settle`` takes the largest share of SETTLE_FRACTIONS that leaves the cell half of each
-    material's partial density and volume fraction, not only half of the total: a products debt of 1.5x the
-    products a mostly-air cell holds settles a quarter (1/3 would leave exactly half), the rest waits in the
-    reservoir; the budget is kept (what left the reservoir is what the cell gained)."""
-    from types import SimpleNamespace
-
-    import jax.numpy as jnp
-
-    from blastfsi.cfdmp import coupling as cp
-    from blastfsi.euler.config import Layout
-
-    lay, V = Layout(2, 1), 1.0
-    alpha = 0.01  # products: 0.01 kg/m^3 at phase density 1; air 0.99 kg/m^3
-    U = jnp.asarray(np.stack([np.full(3, x) for x in (alpha * 1.0, 0.99, 0.0, 2.5e5, alpha)]))
-    layout = SimpleNamespace(face_out=jnp.asarray([1]), cell_volume=jnp.full(3, V))
-    debt = -1.5 * alpha * V
-    res = cp.Reservoirs(mass=jnp.asarray([[debt, 0.0]]), momentum=jnp.zeros((1, 2, 3)),
-                        energy=jnp.asarray([[2.5e5 * debt, 0.0]]), buffer=jnp.full((1, 2), -1, jnp.int32))
-    one = [jnp.asarray([1.0]), jnp.asarray([1.0])]
-    new, left = cp._settle(U, res, jnp.asarray([True]), one, one, lay, layout)
-    new = np.asarray(new)[:, 1]
-    assert new[0] == pytest.approx(alpha - 0.25 * 1.5 * alpha, rel=1e-13) and new[0] > 0.5 * alpha
-    assert new[4] > 0.5 * alpha
-    assert float(left.mass[0, 0]) == pytest.approx(0.75 * debt, rel=1e-13)
-    assert float(left.energy[0, 0]) == pytest.approx(0.75 * 2.5e5 * debt, rel=1e-13)
