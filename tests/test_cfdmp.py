@@ -492,38 +492,3 @@ def test_steel_plate_blast_starts_as_the_paper_case():
     w = h["tracer0_displacement_y"]
     assert w[-1] > np.interp(5e-5, h["time"], w) > 0.0  # still moving away (2.4 mm at 0.05 ms)
 
-
-@pytest.mark.parametrize("arriving", [False, True])
-def test_settled_gas_takes_the_volume_of_where_it_comes_from(arriving):
-    """``coupling._settle``: gas that arrives in the cell outside an outflow face (deleted particles) takes
-    volume at the donor (bridge) cell's phase densities; a debt of the scheme's transfer taken back from
-    that cell takes volume at the cell's own, so its phase densities keep their ratio (the remaining gas
-    expands uniformly to fill the cell). Taken back at the donor's, a products debt removed more products
-    volume than their share and drove a cell's products phase density from 3 to 2.6e5 kg/m^3 in 20 steps
-    (steel-plate-blast, docs/cfdmp.md)."""
-    from types import SimpleNamespace
-
-    import jax.numpy as jnp
-
-    from blastfsi.cfdmp import coupling as cp
-    from blastfsi.euler.config import Layout
-
-    lay, V = Layout(2, 1), 2.0
-    alpha, rho_p, rho_a = 0.1, 3.0, 1.0  # products fraction and phase densities of the receiving cell
-    cell = [alpha * rho_p, (1.0 - alpha) * rho_a, 0.0, 1.0e6, alpha]  # partial densities, momentum, E, alpha
-    U = jnp.asarray(np.stack([np.full(3, x) for x in cell]))
-    layout = SimpleNamespace(face_out=jnp.asarray([1]), cell_volume=jnp.full(3, V))
-    dm = 0.02 if arriving else -0.02  # products mass [kg] settled into cell 1
-    res = cp.Reservoirs(mass=jnp.asarray([[dm, 0.0]]), momentum=jnp.zeros((1, 2, 3)),
-                        energy=jnp.asarray([[1.0e4 * dm, 0.0]]), buffer=jnp.full((1, 2), -1, jnp.int32))
-    donor, own = [jnp.asarray([0.5]), jnp.asarray([1.0])], [jnp.asarray([rho_p]), jnp.asarray([rho_a])]
-    new, left = cp._settle(U, res, jnp.asarray([True]), donor, own, lay, layout)
-    new, left = np.asarray(new)[:, 1], np.asarray(left.mass)
-    assert np.all(left == 0.0)  # the whole balance settled (it leaves the cell more than half its content)
-    assert new[0] == pytest.approx(alpha * rho_p + dm / V, rel=1e-14)
-    if arriving:  # the products arrive at the donor's 0.5 kg/m^3: dm / 0.5 of volume
-        assert new[4] == pytest.approx((alpha * V + dm / 0.5) / (V + dm / 0.5), rel=1e-14)
-    else:  # the cell's own phase densities, scaled alike
-        phase_p, phase_a = new[0] / new[4], new[1] / (1.0 - new[4])
-        assert phase_p / phase_a == pytest.approx(rho_p / rho_a, rel=1e-13)
-        assert phase_a == pytest.approx(rho_a * (V + dm / rho_p) / V, rel=1e-13)  # expanded by the volume taken

@@ -406,24 +406,17 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
     u3 = jnp.zeros((3,) + u.shape[1:], u.dtype).at[:d].set(u)
     res = res._replace(mass=res.mass + m_k.T, momentum=res.momentum + (m_k[:, None, :] * u3[None]).transpose(2, 0, 1),
                        energy=res.energy + carried_e.T)
-    rho_cell = trusted_phases(prim_flat, layout.face_out, eos, n)[0]  # (the cells the balance settles in)
-    U, res = _settle(U, res, ~inflow, rho_k, rho_cell, lay, layout)  # (outflow faces: the donor is the bridge cell)
+    U, res = _settle(U, res, ~inflow, rho_k, lay, layout)  # (outflow faces: the donor is the bridge cell)
     return U, res, budget._replace(pressure_transfer=budget.pressure_transfer + pressure)
 
 
 SETTLE_FRACTIONS = (1.0, 0.5, 0.25, 0.125)  # shares of an outflow reservoir's balance tried, largest first
 
 
-def _settle(U, res: Reservoirs, outflow, rho_k, rho_cell, lay, layout: Layout):
+def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout):
     """Move the balance of the outflow faces' reservoirs (debt of the scheme's convective transfer plus the
-    deleted particles' content) into the Eulerian cells outside those faces. The volume a material's
-    settled mass takes: at ``rho_k``, the phase densities of the donor (bridge) cells, where gas arrives; at
-    ``rho_cell``, the receiving cells' own, where a debt takes gas back, so that the cell's phase densities
-    stay as they were. *Found*: a debt taken back at the donor's phase density from a cell whose products
-    were denser removed more products volume than their share: in steel-plate-blast (docs/cfdmp.md) the
-    cell under the box face went from a products phase density of 3 to 2.6e5 kg/m^3 in 20 steps (volume
-    fraction 0.06 -> 2.6e-7 while the products' partial density fell by a third) until its JWL pressure
-    turned negative.
+    deleted particles' content) into the Eulerian cells outside those faces; ``rho_k`` the phase densities of
+    the donor (bridge) cells, for the volume the settled products take.
 
     Particles cross a face one at a time, each carrying ~1/ppc^ndim of a bridge cell's mass, while the scheme
     transfers a little every step: settling each step's debt at once (before the particle that repays it has
@@ -455,8 +448,7 @@ def _settle(U, res: Reservoirs, outflow, rho_k, rho_cell, lay, layout: Layout):
     moved_m = share[:, None] * res.mass  # (F, n)
     moved_p = share[:, None, None] * res.momentum
     moved_e = share[:, None] * res.energy
-    vol_k = jnp.stack([jnp.where(moved_m[:, k] != 0.0, moved_m[:, k] / jnp.where(moved_m[:, k] > 0.0, rho_k[k],
-                                                                               rho_cell[k]), 0.0) for k in range(n)])
+    vol_k = jnp.stack([jnp.where(moved_m[:, k] != 0.0, moved_m[:, k] / rho_k[k], 0.0) for k in range(n)])
     U = _add_to_cells(U, cells, moved_m.T, jnp.sum(moved_p, axis=1)[:, :d].T, jnp.sum(moved_e, axis=1), vol_k,
                       lay, layout.cell_volume)
     return U, res._replace(mass=res.mass - moved_m, momentum=res.momentum - moved_p, energy=res.energy - moved_e)
