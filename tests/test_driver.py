@@ -202,7 +202,7 @@ def test_piston_squeezing_gas_against_a_wall_exits_with_code_3(tmp_path, capsys)
     t_c = length / float(shock.incident_shock(ratio * P0, P0, RHO0).particle_velocity)
     scenario = {"name": "squeeze", "incident": {"profile": "uniform", "overpressure": ratio * P0},
                 "plate": {"fixed": True}, "domain": {"length": length}, "grid": {"cells": 20},
-                "time": {"end": 100 * t_c}, "output": {"fields": 0, "plots": False, "history_samples": 11}}
+                "time": {"end": 100 * t_c}, "output": {"fields": 0, "plots": False, "history_samples": 1001}}
     (tmp_path / "s.toml").write_text(tomli_w.dumps(scenario))
     code = cli.main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "out"), "--json"])
     out, err = capsys.readouterr()
@@ -210,6 +210,11 @@ def test_piston_squeezing_gas_against_a_wall_exits_with_code_3(tmp_path, capsys)
     assert "time step collapsed below time.dt_min_fraction x initial" in err and "zone" in err
     t = float(err.split("t = ")[1].split()[0])
     assert 0.99 * t_c < t <= t_c
+    # the history up to the fault is written (and named in the message), as the snapshots are
+    history = tmp_path / "out" / "history.csv"
+    assert f"history to the fault: {history}" in err
+    times = np.loadtxt(history, delimiter=",", skiprows=1, usecols=0, ndmin=1)
+    assert len(times) >= 9 and times[0] == 0.0 and np.all(np.diff(times) > 0.0) and times[-1] <= t  # every t_c / 10
 
 
 def test_steps_split_each_sample_interval_into_equal_steps():

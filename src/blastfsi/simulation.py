@@ -274,7 +274,14 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                     compile_time += more
                     grow_compile += more
                     continue
-                _check(state, method, setups, sc, last_ckpt)
+                try:
+                    _check(state, method, setups, sc, last_ckpt)
+                except SimulationError as err:  # the history to the fault is kept, as the snapshots are
+                    if out is None:
+                        raise
+                    columns = method.history_columns(setups[0], sc)
+                    kept = _write_histories(out, columns, [_history_dict(s.hist, columns) for s in _members(state)])
+                    raise SimulationError(f"{err}; history to the fault: {', '.join(map(str, kept))}") from None
                 bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
                            float(np.min(np.asarray(state.dt_prev))))
             if out is None:
@@ -328,12 +335,19 @@ def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_c
                               f"(end {sc.time.end} s); raise time.max_steps or coarsen the grid; {where}")
 
 
+def _write_histories(out: Path, columns, histories: list[dict]) -> list[Path]:
+    """history.csv (one member) or history_member<k>.csv per member; returns the paths."""
+    many = len(histories) > 1
+    paths = [out / (f"history_member{k}.csv" if many else "history.csv") for k in range(len(histories))]
+    for path, hist in zip(paths, histories):
+        results.write_history(path, columns, np.stack([hist[n] for n, _ in columns], axis=1))
+    return paths
+
+
 def _write_outputs(out: Path, res: Result, columns, finals: list) -> None:
-    many = len(res.setups) > 1
-    for k, hist in enumerate(res.histories):
-        name = f"history_member{k}.csv" if many else "history.csv"
-        results.write_history(out / name, columns, np.stack([hist[n] for n, _ in columns], axis=1))
-        if res.snapshots:
+    _write_histories(out, columns, res.histories)
+    if res.snapshots:
+        for k in range(len(res.setups)):
             results.write_series(out, k, res.snapshots, res.method.snapshot(finals[k], res.setups[k]))
     results.write_summary(out, res.summary)
     if res.scenario.output.plots:
