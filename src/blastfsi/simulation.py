@@ -274,14 +274,11 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                     compile_time += more
                     grow_compile += more
                     continue
-                try:
-                    _check(state, method, setups, sc, last_ckpt)
-                except SimulationError as err:  # the history to the fault is kept, as the snapshots are
-                    if out is None:
-                        raise
+                kept = []
+                if out is not None and np.any(np.asarray(state.fault) != FAULT_NONE):  # kept, as the snapshots are
                     columns = method.history_columns(setups[0], sc)
                     kept = _write_histories(out, columns, [_history_dict(s.hist, columns) for s in _members(state)])
-                    raise SimulationError(f"{err}; history to the fault: {', '.join(map(str, kept))}") from None
+                _check(state, method, setups, sc, last_ckpt, kept)
                 bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
                            float(np.min(np.asarray(state.dt_prev))))
             if out is None:
@@ -316,8 +313,12 @@ def _history_dict(rows: np.ndarray, columns) -> dict:
     return {name: rows[:, i] for i, (name, _) in enumerate(columns)}
 
 
-def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_ckpt) -> None:
+def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_ckpt, kept=()) -> None:
+    """Raise SimulationError on a fault (naming ``kept``, the histories written up to it) or when the step
+    budget is spent."""
     where = f"last checkpoint: {last_ckpt}" if last_ckpt else "no checkpoint written yet"
+    if kept:
+        where = f"history to the fault: {', '.join(map(str, kept))}; {where}"
     fault = np.asarray(state.fault)
     if np.any(fault != FAULT_NONE):
         k = int(np.argmax(fault != FAULT_NONE))
