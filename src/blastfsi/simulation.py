@@ -274,10 +274,9 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                     compile_time += more
                     grow_compile += more
                     continue
-                kept = []
-                if out is not None and np.any(np.asarray(state.fault) != FAULT_NONE):  # kept, as the snapshots are
-                    columns = method.history_columns(setups[0], sc)
-                    kept = _write_histories(out, columns, [_history_dict(s.hist, columns) for s in _members(state)])
+                faulted = out is not None and np.any(np.asarray(state.fault) != FAULT_NONE)
+                # a fault keeps the history up to it, as it keeps the snapshots and checkpoints
+                kept = _write_histories(out, *_histories(method, setups, sc, state)) if faulted else []
                 _check(state, method, setups, sc, last_ckpt, kept)
                 bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
                            float(np.min(np.asarray(state.dt_prev))))
@@ -297,8 +296,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     wall = wallclock.perf_counter() - started - grow_compile  # (the time loop only)
 
     finals = _members(state)
-    columns = method.history_columns(setups[0], sc)
-    histories = [_history_dict(s.hist, columns) for s in finals]
+    columns, histories = _histories(method, setups, sc, state)
     summaries = [{"method": sc.method, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
                   "wall_time": wall, "compile_time": compile_time, **method.summary(msc, setup, hist, s)}
                  for s, setup, msc, hist in zip(finals, setups, member_scs, histories)]
@@ -306,6 +304,12 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     if out is not None:
         _write_outputs(out, result, columns, finals)
     return result
+
+
+def _histories(method: methods.Method, setups: list, sc: ScenarioBase, state) -> tuple[list, list[dict]]:
+    """The history columns and each member's recorded history."""
+    columns = method.history_columns(setups[0], sc)
+    return columns, [_history_dict(s.hist, columns) for s in _members(state)]
 
 
 def _history_dict(rows: np.ndarray, columns) -> dict:

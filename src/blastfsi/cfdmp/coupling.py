@@ -294,12 +294,13 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     # u_n / c as a ratio of the nodal sums (m u_n) / (m c): no division by a node's (possibly tiny) mass;
     # outflow_area is -A n_out per axis
     area = jnp.sqrt(jnp.sum(layout.outflow_area ** 2, axis=1))
-    outward = -jnp.sum(momentum * layout.outflow_area, axis=1) / jnp.where(area > 0.0, area, 1.0)
+    area = jnp.where(area > 0.0, area, 1.0)  # (nodes off such faces: any non-zero value, their area rows are 0)
+    outward = -jnp.sum(momentum * layout.outflow_area, axis=1) / area
     ok = mc_node > 0.0
     share = jnp.where(ok, jnp.clip(1.0 + outward / (INFLOW_MACH * jnp.where(ok, mc_node, 1.0)), 0.0, 1.0), 1.0)
     # a node on k such faces gets 1 / 2^k of its support from the particles: the mirrors add 2^k - 1 times that
     mirrors = share * (2.0 ** jnp.sum(layout.outflow_area != 0.0, axis=1) - 1.0)
-    filled = jnp.clip(v_node / (FULL_FILL * 0.5 * cfg.grid.cell_size * jnp.where(area > 0.0, area, 1.0)), 0.0, 1.0)
+    filled = jnp.clip(v_node / (FULL_FILL * 0.5 * cfg.grid.cell_size * area), 0.0, 1.0)
     traction = jnp.where(v_node > 0.0, share * filled * (p_node - reference), 0.0)
     return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * momentum, traction[:, None] * layout.outflow_area)
 
