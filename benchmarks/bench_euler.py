@@ -2,7 +2,7 @@
 
     python benchmarks/bench_euler.py --sizes 64 128 --schemes lax-wendroff hllc-muscl \
         --precision float64 float32 --out benchmarks/results_euler_cpu.json \
-        [--pyclaw FILE.npz [--grids-2d 560 800] [--limiter mc]] [--profile N] [--update]
+        [--pyclaw FILE.npz [--grids-2d 560 800 [--schemes-2d lax-wendroff]] [--limiter mc]] [--profile N] [--update]
 
 3D rows: the whole step (blastfsi.euler.step) on an n^3 grid, ideal gas
 gamma = 1.4, one material, outflow on all faces, a spherical blast (p = 10
@@ -188,9 +188,9 @@ def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats, limit
             "compile_s": compile_s}
 
 
-def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-leer"):
-    """Our 2D blast (both schemes, hllc-muscl with ``limiter``; PyClaw's grid, then extra_grids) and PyClaw's
-    against a 1D cylindrical reference (module docstring)."""
+def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-leer", extra_schemes=tuple(SCHEMES)):
+    """Our 2D blast (hllc-muscl with ``limiter``; both schemes on PyClaw's grid, ``extra_schemes`` on the
+    extra_grids) and PyClaw's against a 1D cylindrical reference (module docstring)."""
     _, _, np, euler, _ = _jax_setup()
     claw = np.load(pyclaw_npz)
     n_claw = int(claw["density"].shape[0])
@@ -205,6 +205,8 @@ def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-le
     rows = []
     for n in [n_claw] + list(extra_grids):
         for scheme, code in SCHEMES.items():
+            if n != n_claw and scheme not in extra_schemes:
+                continue
             s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, cfl, T_END_2D,
                        repeats, LIMITERS[limiter])
             xc, yc = np.meshgrid(*s["axes"], indexing="ij")
@@ -314,7 +316,7 @@ def worker(task):
         return bench_3d(task["n"], task["scheme"], task["repeats"], task["min_time"], task["max_steps"])
     if task["kind"] == "compare2d":
         return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"], task["extra_grids"],
-                          task["limiter"])
+                          task["limiter"], task["extra_schemes"])
     if task["kind"] == "profile":
         return profile(task["n"])
     raise ValueError(f"unknown worker task kind {task['kind']!r}")
@@ -377,7 +379,8 @@ def section_pyclaw(args):
         subprocess.run([args.pyclaw_python, str(HERE / "bench_pyclaw.py"), "--cells", str(args.pyclaw_cells),
                         "--out", args.pyclaw], check=True)
     cmp = spawn({"kind": "compare2d", "npz": args.pyclaw, "cfl": args.cfl, "ref_cells": args.ref_cells,
-                 "repeats": args.repeats_2d, "extra_grids": args.grids_2d, "limiter": args.limiter})
+                 "repeats": args.repeats_2d, "extra_grids": args.grids_2d, "limiter": args.limiter,
+                 "extra_schemes": args.schemes_2d})
     print(f"2D blast {cmp['grid']}, t = {cmp['t_end']}; reference {cmp['reference']['cells']} cells "
           f"(L1 vs half resolution {cmp['reference']['l1_vs_half_resolution_reference']:.2e})")
     for r in cmp["rows"]:
@@ -422,6 +425,8 @@ def main():
     ap.add_argument("--limiter", choices=sorted(LIMITERS), default="van-leer",
                     help="hllc-muscl limiter of the 2D comparison")
     ap.add_argument("--grids-2d", type=int, nargs="*", default=[], help="further grids for our 2D solves")
+    ap.add_argument("--schemes-2d", nargs="+", choices=sorted(SCHEMES), default=list(SCHEMES),
+                    help="schemes solved on the --grids-2d (both always run on PyClaw's grid)")
     ap.add_argument("--repeats-2d", type=int, default=2, help="timed runs of each 2D comparison solve")
     ap.add_argument("--profile", type=int, default=None, metavar="N", help="per-kernel profile at N^3 (float64)")
     ap.add_argument("--out", default=None)

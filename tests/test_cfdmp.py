@@ -329,6 +329,43 @@ def test_trace_materials_get_the_mixture_state():
         assert float(jwl.pressure(rho[k, 1], e[k, 1], rows[k])) == pytest.approx(2.0e5, rel=1e-10)
 
 
+def test_settled_debt_keeps_both_phases_positive():
+    """An outflow reservoir's balance settled into the cell beyond the face (``coupling._two_phase_split``): a
+    products debt larger than the cell holds takes at most half of the cell's products and the rest from its
+    air (total mass unchanged); a debt leaves its material's phase density unchanged; an addition to a
+    material present takes the cell's own phase density, to one absent (below PRESENT) the bridge cell's.
+    Before, the debt was taken at the bridge cell's phase density and as it stood: the products fraction of
+    a mostly-air cell went negative (steel-plate-blast, pure FLIP gas)."""
+    import jax.numpy as jnp
+
+    from blastfsi.cfdmp import coupling as cp
+
+    V = jnp.asarray([1.0, 1.0, 1.0, 1.0])
+    rho_p, rho_a = 4.0, 1.2  # the cells' phase densities
+    alpha = jnp.asarray([0.02, 0.02, 0.5, 1e-6])
+    partial = [alpha * rho_p, (1.0 - alpha) * rho_a]
+    donor = [jnp.full(4, 2.0), jnp.full(4, 1.0)]
+    moved = jnp.asarray([[-0.2, 0.05],     # products debt 2.5 times what the cell holds
+                         [-0.01, 0.0],     # a small products debt
+                         [0.1, 0.2],       # additions to both, both present
+                         [1e-3, 0.0]])     # products added to a cell with a trace of them
+    given, vol = cp._two_phase_split(moved, partial, alpha, V, donor)
+    given, vol = np.asarray(given), np.asarray(vol)
+    np.testing.assert_allclose(given.sum(axis=1), np.asarray(moved).sum(axis=1), rtol=0, atol=1e-15)
+    new_partial = np.stack([np.asarray(q) for q in partial], axis=1) + given
+    assert new_partial[0, 0] == pytest.approx(0.5 * float(partial[0][0]), rel=1e-14)  # half of its products
+    assert np.all(new_partial >= 0.0)
+    np.testing.assert_allclose(given[1:], np.asarray(moved)[1:], rtol=0, atol=1e-15)  # nothing relabelled
+    new_alpha = (np.asarray(alpha) + vol[0]) / (1.0 + vol[0] + vol[1])
+    assert np.all((new_alpha > 0.0) & (new_alpha < 1.0))
+    # a debt: the products phase density is unchanged by removing products with their share of the volume
+    assert float(partial[0][1] + given[1, 0]) / float(alpha[1] + vol[0, 1]) == pytest.approx(rho_p, rel=1e-12)
+    # additions at the cell's own phase densities (cell 2): both phases scale by the same factor
+    assert vol[0, 2] == pytest.approx(0.1 / rho_p, rel=1e-14) and vol[1, 2] == pytest.approx(0.2 / rho_a, rel=1e-14)
+    # products added where they are a trace (mass fraction 3e-6 < PRESENT): the bridge cell's phase density
+    assert vol[0, 3] == pytest.approx(1e-3 / 2.0, rel=1e-14)
+
+
 def test_gas_at_rest_stays_at_rest_on_outflow_box_faces():
     """A 2D box whose faces lie on outflow faces of the domain (the he-slab-2d layout): the mirror gas of
     ``outflow_ghost`` (mass, momentum and traction on those faces' nodes) balances the particles' stress.
