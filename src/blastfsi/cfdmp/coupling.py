@@ -492,7 +492,7 @@ def _two_phase_split(moved_m, partial, alpha, V, rho_donor):
         holds = (q > 0.0) & (a > 0.0)
         own = jnp.where(holds, q / jnp.where(holds, a, 1.0), 1.0)  # the cell's phase density
         trusted = holds & (q >= PRESENT * rho)
-        taken = jnp.where(holds, m / jnp.where(holds, own, 1.0), 0.0)
+        taken = jnp.where(holds, m / own, 0.0)
         added = jnp.where(m != 0.0, m / jnp.where(trusted, own, rho_donor[k]), 0.0)
         vol.append(jnp.where(m < 0.0, taken, added))
     return given, jnp.stack(vol)
