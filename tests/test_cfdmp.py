@@ -20,6 +20,18 @@ from blastfsi.scenario import ScenarioError
 FAST = {"grid.cells": 200, "output.plots": False, "output.fields": 3, "output.history_samples": 61}
 
 
+def assert_budget_closed(summary, mass=1e-13):
+    """Mass closes to round-off; with the MPM steps' change and the Eulerian face pressure transfer booked, so
+    do momentum (conserved axes) and energy: the transport (reservoirs, particle creation, cuts and deletion,
+    settling, boundary outflow) loses nothing. Round-off: ~1e-16 per step and per reduction over a few 1e3
+    steps (measured <= 1.2e-15 on cfdmp-shock-tube, 2.6e-16 on he-slab-2d to 15 us)."""
+    b = summary["budget"]
+    assert b["max_mass_residual_relative"] < mass
+    transport = {k: v for k, v in b["transport"].items() if k.startswith("max_")}
+    assert "max_energy_residual_relative" in transport and len(transport) > 1
+    assert all(v < 1e-12 for v in transport.values()), transport
+
+
 def tube(**initial):
     d = example_data("cfdmp-shock-tube")
     d["initial"].update(initial)
@@ -49,7 +61,7 @@ def test_gas_at_rest_stays_at_rest():
     # the view of the box comes from the particles; round-off only (1e-12 of the pressure)
     assert np.max(np.abs(f["pressure"] - 1.0e5)) < 1e-12 * 1.0e5 * 10
     assert np.max(np.abs(f["velocity"])) < 1e-9
-    assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14
+    assert_budget_closed(res.summary, 1e-14)
 
 
 @pytest.mark.parametrize("speed", [100.0, 293.3])
@@ -66,7 +78,7 @@ def test_uniform_flow_passes_through_the_box_undisturbed(speed):
     assert np.max(np.abs(f["density"] / 0.2656 - 1.0)) < 1e-9
     assert np.max(np.abs(f["pressure"] / 30313.0 - 1.0)) < 1e-9
     assert np.max(np.abs(f["velocity"][:, 0] - speed)) < 1e-9 * speed
-    assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14
+    assert_budget_closed(res.summary, 1e-14)
 
 
 def test_shock_crosses_the_mpm_region(shock):
@@ -74,7 +86,7 @@ def test_shock_crosses_the_mpm_region(shock):
     s = coupled.summary
     assert s["coupled_faces"] == ["lower x", "upper x"] and s["activation_time"] == 0.0
     # mass: Eulerian-only cells + particles + reservoirs + domain outflow, exact up to round-off
-    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(s, 1e-13)
     exact = RiemannProblem((1.0, 0.0, 1e5), (0.125, 0.0, 1e4), x0=0.3)
     jump = exact.p_star - 1e4
     worst = 0.0
@@ -98,7 +110,7 @@ def test_shock_crosses_the_mpm_region_with_the_ambient_reference_pressure(tmp_pa
     flow-out mirror take p - p_ref. Measured at 200 / 400 cells: reflection at the bridge 1.47 / 1.27 % of the
     jump (absolute stresses 1.78 / 1.59 %), L1 ratio at most 1.218 at 400 cells (absolute 1.249)."""
     coupled, euler = shock_tube_and_its_eulerian_twin(tmp_path, FAST, {"numerics.reference_pressure": 1.0e4})
-    assert coupled.summary["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(coupled.summary, 1e-13)
     exact = RiemannProblem((1.0, 0.0, 1e5), (0.125, 0.0, 1e4), x0=0.3)
     jump = exact.p_star - 1e4
     for _, t in coupled.snapshots[1:]:
@@ -138,7 +150,7 @@ def test_strong_shock_leaves_the_mpm_region():
     res = blastfsi.run(tube(left={"material": "air", "density": L[0], "pressure": L[2]},
                             right={"material": "air", "density": R[0], "pressure": R[2]}),
                        set={**FAST, "grid.cells": 400, "time.end": 1.6e-4, "output.history_samples": 2001})
-    assert res.summary["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(res.summary, 1e-13)
     exact = RiemannProblem(L, R, x0=0.3)
     f = res.fields()
     x, p = f["x"], f["pressure"]
@@ -162,7 +174,7 @@ def test_a_full_pool_grows_and_a_fixed_one_stops_the_run(shock):
     coupled, _ = shock
     initial = methods.get("cfdmp").build(expand(api.load("cfdmp-shock-tube", set=FAST))[2][0]).capacity
     assert np.nanmax(coupled.history["particles"]) > initial and coupled.summary["capacity"] > initial
-    assert coupled.summary["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(coupled.summary, 1e-13)
     roomy = blastfsi.run("cfdmp-shock-tube", set={**FAST, "numerics.capacity": 20 * initial})
     assert roomy.summary["capacity"] == 20 * initial
     assert coupled.summary["steps"] == roomy.summary["steps"]
@@ -255,7 +267,7 @@ def test_clamped_plate_deflects_and_its_supports_hold():
     assert clamp == [0.0, 0.0] and s["tracer_peak_displacement"][1] == [0.0, 0.0]
     assert np.all(h["tracer0_displacement_x"] >= 0.0) and peak > 2.0 * centre[0] > 0.0  # measured 4.8e-4, 1.5e-4 m
     assert abs(centre[1]) < 1e-2 * peak  # symmetric about the channel's mid-plane
-    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(s, 1e-13)
 
 
 @pytest.mark.slow
@@ -272,7 +284,7 @@ def test_three_dimensional_coupling_closes_its_mass_budget():
     res = blastfsi.run(d)
     s = res.summary
     assert s["coupled_faces"] == ["lower x"]
-    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(s, 1e-13)
     # the shock (554 m/s) reaches the box face at 36 us and the first bridge cells before the end
     assert s["gauges"][1]["region"] == "bridge" and s["gauges"][1]["peak_overpressure"] > 1e4
 
@@ -286,7 +298,7 @@ def test_he_slab_3d_runs_and_closes_its_mass_budget():
     res = blastfsi.run("he-slab-3d", set={"output.fields": 0, "output.plots": False})
     s = res.summary
     assert s["coupled_faces"] == ["lower x"] and s["time"] == pytest.approx(2.0e-5)
-    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(s, 1e-13)
     g1, g2 = s["gauges"]
     assert g1["region"] == "euler" and g2["region"] == "particles"
     assert 0.5 * 24.3e6 < g1["peak_overpressure"] < 24.3e6
@@ -385,7 +397,7 @@ def test_gas_at_rest_stays_at_rest_on_outflow_box_faces():
     assert np.nanmax(np.abs(f["pressure"] - 1.0e5)) < 1e-4 * 1.0e5
     assert res.summary["bridge_cells"] == 5 and isinstance(res.summary["bridge_cells"], int)  # (was an array)
     json.dumps(res.summary)  # the summary.json of a results directory
-    assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14
+    assert_budget_closed(res.summary, 1e-14)
 
 
 def test_outflow_mirror_is_one_way():
@@ -485,7 +497,7 @@ def test_structure_fragments_leave_through_a_flow_out_face():
     block = 7850.0 * 0.06  # kg/m^2: the library's steel density x length (1D: per unit area)
     assert s["structures"]["mass_left_the_box"] == pytest.approx(block, rel=1e-12)
     assert res.history["mass_structures"][-1] == 0.0
-    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(s, 1e-13)
     # the block holds ~all of the system's energy, 1/24 of it per particle: one particle's energy unbooked
     # would leave a residual of 4e-2 (measured 3.2e-5: the work on the air through MUSL)
     assert abs(s["budget"]["energy_residual_relative"]) < 1e-3
@@ -508,7 +520,7 @@ def test_axisymmetric_gas_at_rest_stays_at_rest(lower, upper):
     assert res.summary["steps"] > 50
     assert np.nanmax(np.abs(f["pressure"] - 1.0e5)) < 1e-12 * 1.0e5 * 10
     assert np.nanmax(np.abs(f["velocity"])) < 1e-9
-    assert res.summary["budget"]["max_mass_residual_relative"] < 1e-14
+    assert_budget_closed(res.summary, 1e-14)
     assert abs(res.summary["budget"]["energy_residual_relative"]) < 1e-12
 
 
@@ -521,7 +533,7 @@ def test_steel_plate_blast_starts_as_the_paper_case():
                                                   "output.tracers": [[0.0, 0.105], [0.27, 0.105]]})
     s, h = res.summary, res.history
     assert s["coupled_faces"] == ["lower y"]
-    assert s["budget"]["max_mass_residual_relative"] < 1e-13
+    assert_budget_closed(s, 1e-13)
     centre, rim = s["tracer_displacement"]
     assert rim == [0.0, 0.0]
     assert 0.004 < centre[1] < 0.012  # measured 7.9 mm at 0.1 ms (2026-12-03)

@@ -48,7 +48,14 @@ the 14 steps regrouped):
      particle leaves the run (``boundary_out``).
 
 Mass budget, exact up to round-off: Eulerian-only cells + particles +
-reservoirs + boundary_out = constant from activation on.
+reservoirs + boundary_out = constant from activation on. Momentum and energy: the
+same sum changes only by what the MPM step does to the particles (the interface
+nodes' force, the outflow mirror, supports and grid faces, and the MPM scheme's
+own non-conservation; booked as ``mpm_step``) minus the pressure part of the
+scheme's face transfer (``pressure_transfer``): with both booked the transport
+(reservoirs, particle creation and deletion, settling, boundary outflow) closes
+to round-off, and ``mpm_step - pressure_transfer`` is the coupling's momentum
+and energy error.
 """
 from __future__ import annotations
 
@@ -136,6 +143,16 @@ class Budget(NamedTuple):
     required: jnp.ndarray  # () int32: active particles an emission needed (> capacity: the run stops)
     structure_out: jnp.ndarray  # () mass of structure particles that left the box (their momentum and energy
     #                             are in boundary_out; structure mass is not part of the gas budget's rows)
+    mpm_step: jnp.ndarray  # (ndim + 1,) momentum and energy the MPM steps gave the particles (mpm_content)
+
+
+def mpm_content(P: mpm.Particles, ndim: int):
+    """(ndim + 1,) momentum and total energy of the active particles: the MPM step changes them (not the
+    mass), and ``Budget.mpm_step`` books each step's change."""
+    _, mom, energy = particle_content(P)
+    on = P.active
+    return jnp.concatenate([jnp.sum(jnp.where(on[:, None], mom, 0.0), axis=0)[:ndim],
+                            jnp.sum(jnp.where(on, energy, 0.0))[None]])
 
 
 def flat_primitives(U, eos, cfg: ek.Config) -> dict:
@@ -611,7 +628,8 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     the last release: the layer next to the face, of thickness m / (rho A) (A the face's area), spanning the face cell
     (GIMP half-sizes: half the thickness normal to the face, h/2 along it), with the bridge cell's phase
     density, the mass-weighted velocity and the internal energy left by the total energy (Eq. 48
-    generalised: e = E/m - |v|^2/2), stress -p I from its EOS. It is released to move with the MPM solution
+    generalised: e = E/m - |v|^2/2; where that is negative, e = 0 and the deficit stays in the reservoir),
+    stress -p I from its EOS. It is released to move with the MPM solution
     once it is as thick as a gas particle (h / ppc), and the next one starts at the face; so no gap opens
     between the face and the gas inside.
     """
@@ -640,6 +658,9 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     v = (m_old[..., None] * v_old + jnp.where(fed[..., None], res.momentum, 0.0)) / safe[..., None]
     e = ((m_old * (e_old + 0.5 * jnp.sum(v_old * v_old, axis=-1)) + jnp.where(fed, res.energy, 0.0)) / safe
          - 0.5 * jnp.sum(v * v, axis=-1))
+    # a reservoir that took debts (outflow) between inflows can hold less energy than its momentum's kinetic
+    # energy: the particle gets e = 0 and the deficit m e < 0 stays in the reservoir for the next inflow
+    deficit = jnp.where(fed, jnp.minimum(e, 0.0) * m, 0.0)
     e = jnp.maximum(e, 0.0)
     area = (layout.face_measure / h)[:, None]  # (h^(ndim-1) on Cartesian grids, the ring's 2 pi r h on r-z ones)
     thick = jnp.clip(m / (rho * area), 0.0, h)
@@ -676,7 +697,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     buffer = jnp.where(released & fits, -1, buffer).astype(jnp.int32)
     keep = ~fits | ~fed
     res = Reservoirs(mass=jnp.where(keep, res.mass, 0.0), momentum=jnp.where(keep[..., None], res.momentum, 0.0),
-                     energy=jnp.where(keep, res.energy, 0.0), buffer=buffer)
+                     energy=jnp.where(keep, res.energy, deficit), buffer=buffer)
     budget = budget._replace(required=jnp.maximum(budget.required, required.astype(jnp.int32)))
     return state._replace(particles=pool), res, budget
 

@@ -93,6 +93,12 @@ def _pad3(a: np.ndarray) -> np.ndarray:
     return np.pad(a, ((0, 0), (0, 3 - a.shape[1])))
 
 
+def conserved_momentum_axes(geometry: int, ndim: int) -> tuple:
+    """The axes whose momentum the equations conserve: all on a Cartesian grid; not the radial one of a
+    cylindrical, spherical or r-z grid (the pressure's geometric source, the hoop stress)."""
+    return tuple(range(ndim)) if geometry == GEOMETRY_CODE["cartesian"] else tuple(range(1, ndim))
+
+
 def system_totals(U, P: mpm.Particles, res: cp.Reservoirs, layout: cp.Layout, static: cp.Static):
     """(n + ndim + 1,) mass per material, momentum and total energy of Eulerian-only cells + particles +
     reservoirs, and the same three parts separately."""
@@ -230,7 +236,7 @@ class Cfdmp:
         res = cp.Reservoirs(jnp.zeros((F, n), dtype), jnp.zeros((F, n, 3), dtype), jnp.zeros((F, n), dtype),
                             jnp.full((F, n), -1, jnp.int32))
         budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32),
-                           jnp.zeros((), dtype))
+                           jnp.zeros((), dtype), jnp.zeros(d + 1, dtype))
         zeros = jnp.zeros(n + d + 1, dtype)
         maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
@@ -252,6 +258,7 @@ class Cfdmp:
         tracers = jnp.asarray(static.tracers, jnp.int32)  # (structure slots: never deleted or moved)
         d = len(cfg.shape)
         pref = params.mpm.reference_pressure
+        conserved = conserved_momentum_axes(cfg.geometry, d)
 
         def stable_dt(s):
             dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
@@ -265,18 +272,24 @@ class Cfdmp:
             s = jax.lax.cond(hot, lambda s: _activate(s, params, cs), lambda s: s, s)
             return s, s.U
 
+        def mpm_step(s, dt, source):  # the MPM step, its change of the particles' momentum and energy booked
+            before = cp.mpm_content(s.mpm.particles, d)
+            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, source)
+            change = cp.mpm_content(ms.particles, d) - before
+            return ms, s.budget._replace(mpm_step=s.budget.mpm_step + change)
+
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, pref, (idx, w)))
-            ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
+            ms, budget = mpm_step(s, dt, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, pref, (idx, w)))
+            ms, res, budget = cp.remove_leaving(ms, s.reservoirs, budget, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
             return s._replace(mpm=ms, reservoirs=res, budget=budget), cp.view(s.U, rows, gas_volume, lay)
 
         def coupled(s, dt):
             eos = params.euler.eos
             prim = cp.flat_primitives(s.U, eos, cfg)
-            ms = mpm.step(s.mpm, dt, params.mpm, mcfg, cp.interface_source(prim, lay, cs, pref))
+            ms, budget = mpm_step(s, dt, cp.interface_source(prim, lay, cs, pref))
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
-            ms, res, budget = cp.remove_leaving(ms, s.reservoirs, s.budget, cs, lay)
+            ms, res, budget = cp.remove_leaving(ms, s.reservoirs, budget, cs, lay)
             U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
             ms, res, budget = cp.feed(ms, res, budget, cp.flat_primitives(U, eos, cfg), eos, params.mpm, cs, lay)
@@ -302,13 +315,23 @@ class Cfdmp:
             mass_residual = jnp.where(s.coupled, (jnp.sum(account[:n]) - jnp.sum(s.baseline[:n]))
                                       / jnp.sum(scale[:n]), 0.0)
             energy_residual = jnp.where(s.coupled, (account[-1] - s.baseline[-1]) / scale[-1], 0.0)
+            # with the MPM steps' change and the face pressure transfer booked: the transport alone
+            exchange = s.budget.mpm_step - s.budget.pressure_transfer
+            transport = account[n:] - s.baseline[n:] - exchange
+            # momentum relative to sqrt(2 M E) at activation (the momentum the system's energy could carry)
+            p_scale = jnp.where(s.coupled, jnp.sqrt(2.0 * jnp.sum(scale[:n]) * scale[-1]), 1.0)
+            momentum_residuals = []
+            for a in conserved:
+                momentum_residuals += [jnp.where(s.coupled, (account[n + a] - s.baseline[n + a]) / p_scale, 0.0),
+                                       jnp.where(s.coupled, transport[a] / p_scale, 0.0)]
             U = self._view(s, cs, lay)
             prim = cp.flat_primitives(U, params.euler.eos, cfg)
             row = [s.t, s.coupled.astype(s.t.dtype), jnp.sum(P.active).astype(s.t.dtype),
                    jnp.sum(euler[:n]), jnp.sum(particles[:n]), structure, jnp.sum(reservoirs[:n]),
                    jnp.sum(s.budget.boundary_out[:n]), mass_residual,
                    euler[-1], particles[-1], reservoirs[-1], s.budget.boundary_out[-1], s.budget.pressure_transfer[-1],
-                   energy_residual]
+                   energy_residual, s.budget.mpm_step[-1], jnp.where(s.coupled, transport[-1] / scale[-1], 0.0)]
+            row += momentum_residuals
             row += list(total[n:n + d])
             nst = cs.n_structure
             if nst:
@@ -338,7 +361,9 @@ class Cfdmp:
                 ("mass_structures", kg), ("mass_reservoirs", kg), ("mass_boundary_out", kg),
                 ("mass_budget_residual", "1"), ("energy_euler", J), ("energy_particles", J),
                 ("energy_reservoirs", J), ("energy_boundary_out", J), ("energy_pressure_transfer", J),
-                ("energy_budget_residual", "1")]
+                ("energy_budget_residual", "1"), ("energy_mpm_step", J), ("energy_transport_residual", "1")]
+        for a in conserved_momentum_axes(GEOMETRY_CODE[setup.euler.grid.geometry], nd):
+            cols += [(f"momentum_{AXES[a]}_budget_residual", "1"), (f"momentum_{AXES[a]}_transport_residual", "1")]
         cols += [(f"momentum_{a}", mom) for a in AXES[:nd]]
         if setup.info["structure_particles"]:
             cols += [("structure_max_displacement", "m"), ("structure_max_damage", "1"),
@@ -464,6 +489,18 @@ class Cfdmp:
                    "max_mass_residual_relative": float(np.max(np.abs(hist["mass_budget_residual"]))),
                    "energy_residual_relative": float(hist["energy_budget_residual"][-1]),
                    "energy_pressure_transfer": float(hist["energy_pressure_transfer"][-1]),
+                   "energy_mpm_step": float(hist["energy_mpm_step"][-1]),
+                   "transport": {
+                       "accounts": "the sum above with the MPM steps' change of the particles' momentum and energy "
+                                   "(interface force, outflow mirror, supports, the MPM scheme's non-conservation) "
+                                   "and the pressure part of the Eulerian face transfer booked; momentum relative to "
+                                   "sqrt(2 M E) at activation, conserved axes only",
+                       "max_energy_residual_relative": float(np.max(np.abs(hist["energy_transport_residual"]))),
+                       **{f"max_momentum_{AXES[a]}_residual_relative":
+                          float(np.max(np.abs(hist[f"momentum_{AXES[a]}_transport_residual"])))
+                          for a in conserved_momentum_axes(GEOMETRY_CODE[e.grid.geometry], nd)}},
+                   **{f"momentum_{AXES[a]}_residual_relative": float(hist[f"momentum_{AXES[a]}_budget_residual"][-1])
+                      for a in conserved_momentum_axes(GEOMETRY_CODE[e.grid.geometry], nd)},
                    "mass_at_activation": float(baseline[:n].sum()), "energy_at_activation": float(baseline[-1]),
                    "mass_boundary_out": float(hist["mass_boundary_out"][-1]),
                    "mass_in_reservoirs": float(hist["mass_reservoirs"][-1]),
