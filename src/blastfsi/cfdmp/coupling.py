@@ -50,8 +50,9 @@ the 14 steps regrouped):
 Mass budget, exact up to round-off: Eulerian-only cells + particles +
 reservoirs + boundary_out = constant from activation on. Momentum and energy: the
 same sum changes only by what the MPM step does to the particles (the interface
-nodes' force, the outflow mirror, supports and grid faces, and the MPM scheme's
-own non-conservation; booked as ``mpm_step``) minus the pressure part of the
+nodes' force, supports and grid faces, and the MPM scheme's own non-conservation;
+booked as ``mpm_step``; the outflow mirror's traction is the pressure flux through
+the domain boundary, booked with ``boundary_out``) minus the pressure part of the
 scheme's face transfer (``pressure_transfer``): with both booked the transport
 (reservoirs, particle creation and deletion, settling, boundary outflow) closes
 to round-off, and ``mpm_step - pressure_transfer`` is the coupling's momentum
@@ -137,13 +138,15 @@ class Reservoirs(NamedTuple):
 class Budget(NamedTuple):
     """Running sums of what crossed the system's boundary and what the interface exchanged."""
 
-    boundary_out: jnp.ndarray  # (n_materials + ndim + 1,) mass per material, momentum, energy that left
+    boundary_out: jnp.ndarray  # (n_materials + ndim + 1,) mass per material, momentum, energy that left (the
+    #                            Eulerian boundary fluxes, particles leaving the run, the flow-out mirror's traction)
     pressure_transfer: jnp.ndarray  # (ndim + 1,) momentum and energy of the scheme's face transfer not carried
     #                                 by the reservoirs (the interface pressure's impulse and work)
     required: jnp.ndarray  # () int32: active particles an emission needed (> capacity: the run stops)
     structure_out: jnp.ndarray  # () mass of structure particles that left the box (their momentum and energy
     #                             are in boundary_out; structure mass is not part of the gas budget's rows)
-    mpm_step: jnp.ndarray  # (ndim + 1,) momentum and energy the MPM steps gave the particles (mpm_content)
+    mpm_step: jnp.ndarray  # (ndim + 1,) momentum and energy the MPM steps gave the particles (mpm_content),
+    #                        but the flow-out mirror's traction (booked in boundary_out, with the opposite sign)
 
 
 def mpm_content(P: mpm.Particles, ndim: int):
@@ -297,7 +300,7 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
     if not static.outflow:
-        return mpm.musl.NodalSource(zero[:, 0], zero, zero)
+        return mpm.musl.NodalSource(zero[:, 0], zero, zero, zero)
     slot = _gas_index(static, P.material)
     m = jnp.where(P.active & (slot >= 0), P.mass, 0.0)
     p = -(P.point.stress[:, 0] + P.point.stress[:, 1] + P.point.stress[:, 2]) / 3.0 + P.q
@@ -319,7 +322,8 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     mirrors = share * (2.0 ** jnp.sum(layout.outflow_area != 0.0, axis=1) - 1.0)
     filled = jnp.clip(v_node / (FULL_FILL * 0.5 * cfg.grid.cell_size * area), 0.0, 1.0)
     traction = jnp.where(v_node > 0.0, share * filled * (p_node - reference), 0.0)
-    return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * momentum, traction[:, None] * layout.outflow_area)
+    force = traction[:, None] * layout.outflow_area
+    return mpm.musl.NodalSource(mirrors * m_node, mirrors[:, None] * momentum, force, boundary=force)
 
 
 def interface_source(prim_flat: dict, layout: Layout, static: Static, reference):
@@ -347,7 +351,7 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static, reference)
     force = jnp.stack(force, axis=1)
     def source(P: mpm.Particles, idx, w) -> mpm.musl.NodalSource:
         ghost = outflow_ghost(P, layout, static, reference, (idx, w))
-        return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force)
+        return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force, ghost.boundary)
 
     return source
 

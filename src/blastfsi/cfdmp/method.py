@@ -259,6 +259,7 @@ class Cfdmp:
         d = len(cfg.shape)
         pref = params.mpm.reference_pressure
         conserved = conserved_momentum_axes(cfg.geometry, d)
+        n_gas = cfg.n_materials
 
         def stable_dt(s):
             dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
@@ -272,11 +273,14 @@ class Cfdmp:
             s = jax.lax.cond(hot, lambda s: _activate(s, params, cs), lambda s: s, s)
             return s, s.U
 
-        def mpm_step(s, dt, source):  # the MPM step, its change of the particles' momentum and energy booked
+        def mpm_step(s, dt, source):  # the MPM step; its change of the particles' momentum and energy booked:
+            # the flow-out mirror's traction with what crossed the domain boundary, the rest as mpm_step
             before = cp.mpm_content(s.mpm.particles, d)
             ms = mpm.step(s.mpm, dt, params.mpm, mcfg, source)
             change = cp.mpm_content(ms.particles, d) - before
-            return ms, s.budget._replace(mpm_step=s.budget.mpm_step + change)
+            boundary = ms.boundary_exchange - s.mpm.boundary_exchange
+            return ms, s.budget._replace(mpm_step=s.budget.mpm_step + change - boundary,
+                                         boundary_out=s.budget.boundary_out.at[n_gas:].add(-boundary))
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
             ms, budget = mpm_step(s, dt, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, pref, (idx, w)))
@@ -492,9 +496,10 @@ class Cfdmp:
                    "energy_mpm_step": float(hist["energy_mpm_step"][-1]),
                    "transport": {
                        "accounts": "the sum above with the MPM steps' change of the particles' momentum and energy "
-                                   "(interface force, outflow mirror, supports, the MPM scheme's non-conservation) "
-                                   "and the pressure part of the Eulerian face transfer booked; momentum relative to "
-                                   "sqrt(2 M E) at activation, conserved axes only",
+                                   "(interface force, supports, the MPM scheme's non-conservation; the flow-out "
+                                   "mirror's traction with the boundary outflow) and the pressure part of the Eulerian "
+                                   "face transfer booked; momentum relative to sqrt(2 M E) at activation, conserved "
+                                   "axes only, largest over the history samples",
                        "max_energy_residual_relative": float(np.max(np.abs(hist["energy_transport_residual"]))),
                        **{f"max_momentum_{AXES[a]}_residual_relative":
                           float(np.max(np.abs(hist[f"momentum_{AXES[a]}_transport_residual"])))
