@@ -125,7 +125,7 @@ class Static(NamedTuple):
     gas_material: tuple  # MPM material index of each Eulerian material
     n_structure: int  # structure particles (first slots of the pool)
     ppc: int  # gas particles per cell and direction
-    outflow: bool  # some box face lies on an outflow face of the domain (outflow_ghost)
+    outflow_faces: tuple  # (axis, side) per box face on an outflow face of the domain (outflow_ghost, remove_leaving)
 
 
 class Reservoirs(NamedTuple):
@@ -299,7 +299,7 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     cfg = static.mpm
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
-    if not static.outflow:
+    if not static.outflow_faces:
         return mpm.musl.NodalSource(zero[:, 0], zero, zero, zero)
     slot = _gas_index(static, P.material)
     m = jnp.where(P.active & (slot >= 0), P.mass, 0.0)
@@ -541,26 +541,44 @@ def particle_content(P: mpm.Particles):
     return P.mass, P.mass[:, None] * P.v, P.mass * (P.point.energy + ke)
 
 
-def cut_at_coupled_faces(x, half, lo, hi, static: Static):
-    """Gas particles straddling a coupled face, cut at it: per particle (share of it beyond the face,
-    index of that face cell or -1, centre and half-size of the part inside (n, d)).
+def _cut(x, half, lo, hi, axis: int, side: int, axisymmetric: bool):
+    """One face of the box, ``axis`` and ``side`` (0 lower, 1 upper): per particle the share of its mass
+    beyond the face, and its centre and half-size along ``axis`` once cut to the part inside.
 
-    A gas particle occupies [x - l, x + l] per direction (l its GIMP half-size). The fraction
-    phi = clip((x + l - hi) / 2l, 0, 1) of it lies beyond an upper coupled face (lower face mirrored): that
-    share leaves to the face cell's reservoir (on the radial axis of an r-z grid the share of the ring's mass,
-    ((x + l)^2 - hi^2) / ((x + l)^2 - (x - l)^2)), and the particle keeps the part inside, [x - l, hi], as its
-    new domain (centre hi - l', half-size l' = (1 - phi) l, the same density). So the particles never overlap
-    the ring cells beyond the face, which stand for that gas on the interface nodes (000 Eqs. 37-39), and
-    the gas leaves at the rate it crosses the face instead of one particle at a time (docs/cfdmp.md)."""
+    A particle occupies [x - l, x + l] per direction (l its GIMP half-size). The fraction
+    phi = clip((x + l - hi) / 2l, 0, 1) of it lies beyond an upper face (lower face mirrored); on the radial
+    axis of an r-z grid its mass share is that of the ring, ((x + l)^2 - hi^2) / ((x + l)^2 - (x - l)^2).
+    The part inside, [x - l, hi], is the new domain: centre hi - l', half-size l' = (1 - phi) l."""
+    l = half[:, axis]
+    past = (x[:, axis] + l - hi[axis]) if side == 1 else (lo[axis] - x[:, axis] + l)
+    phi = jnp.clip(past / jnp.where(l > 0.0, 2.0 * l, 1.0), 0.0, 1.0)
+    if axisymmetric and axis == 0:  # ring particles: the share of the ring's mass, r dr
+        inner, outer = x[:, 0] - l, x[:, 0] + l
+        span = jnp.where(l > 0.0, outer ** 2 - inner ** 2, 1.0)
+        edge = hi[0] if side == 1 else lo[0]
+        mass_phi = jnp.clip(((outer ** 2 - edge ** 2) if side == 1 else (edge ** 2 - inner ** 2)) / span, 0.0, 1.0)
+    else:
+        mass_phi = phi
+    l_in = (1.0 - phi) * l
+    cut = phi > 0.0
+    centre = jnp.where(cut, (hi[axis] - l_in) if side == 1 else (lo[axis] + l_in), x[:, axis])
+    return jnp.where(cut, mass_phi, 0.0), centre, jnp.where(cut, l_in, l)
+
+
+def cut_at_coupled_faces(x, half, lo, hi, static: Static):
+    """Gas particles straddling a coupled face, cut at it (:func:`_cut`): per particle (share of it beyond the
+    face, index of that face cell or -1, centre and half-size of the part inside (n, d)).
+
+    The share beyond leaves to the face cell's reservoir and the particle keeps the part inside. So the
+    particles never overlap the ring cells beyond the face, which stand for that gas on the interface nodes
+    (000 Eqs. 37-39), and the gas leaves at the rate it crosses the face instead of one particle at a time
+    (docs/cfdmp.md)."""
     d = static.mpm.grid.dim
     h = static.mpm.grid.cell_size
     share = jnp.zeros(x.shape[:1], x.dtype)
     face = jnp.full(x.shape[:1], -1, jnp.int32)
     first = 0
     for (axis, side, _plane), size in zip(static.faces, static.face_sizes):
-        l = half[:, axis]
-        past = (x[:, axis] + l - hi[axis]) if side == 1 else (lo[axis] - x[:, axis] + l)
-        phi = jnp.clip(past / jnp.where(l > 0.0, 2.0 * l, 1.0), 0.0, 1.0)
         lateral = jnp.zeros(x.shape[:1], jnp.int32)
         for a in range(d):
             if a == axis:
@@ -568,57 +586,70 @@ def cut_at_coupled_faces(x, half, lo, hi, static: Static):
             n_a = static.box_hi[a] - static.box_lo[a]
             i = jnp.clip(jnp.floor((x[:, a] - lo[a]) / h).astype(jnp.int32), 0, n_a - 1)
             lateral = lateral * n_a + i
-        if static.mpm.grid.axisymmetric and axis == 0:  # ring particles: the share of the ring's mass, r dr
-            inner, outer = x[:, 0] - l, x[:, 0] + l
-            span = jnp.where(l > 0.0, outer ** 2 - inner ** 2, 1.0)
-            edge = hi[0] if side == 1 else lo[0]
-            mass_phi = jnp.clip(((outer ** 2 - edge ** 2) if side == 1 else (edge ** 2 - inner ** 2)) / span, 0.0, 1.0)
-        else:
-            mass_phi = phi
-        l_in = (1.0 - phi) * l
-        cut = phi > 0.0
-        x = x.at[:, axis].set(jnp.where(cut, (hi[axis] - l_in) if side == 1 else (lo[axis] + l_in), x[:, axis]))
-        half = half.at[:, axis].set(jnp.where(cut, l_in, l))
-        face = jnp.where(cut, first + lateral, face)
-        share = 1.0 - (1.0 - share) * (1.0 - jnp.where(cut, mass_phi, 0.0))  # (cut at two faces: a corner)
+        phi, centre, l_in = _cut(x, half, lo, hi, axis, side, static.mpm.grid.axisymmetric)
+        x, half = x.at[:, axis].set(centre), half.at[:, axis].set(l_in)
+        face = jnp.where(phi > 0.0, first + lateral, face)
+        share = 1.0 - (1.0 - share) * (1.0 - phi)  # (cut at two faces: a corner)
         first += size
     return share, face, x, half
+
+
+def cut_at_outflow_faces(x, half, lo, hi, static: Static):
+    """Particles straddling a box face that lies on an outflow face of the domain, cut at it (:func:`_cut`):
+    per particle (share of it beyond the face, centre and half-size of the part inside). The share beyond
+    leaves the run. *Found* (2026-12-04): with particles leaving whole once their centre crossed, such a
+    face held back a uniform outflow: a particle half beyond the face no longer pushed the face nodes with
+    its outer half while the mirror's traction (:func:`outflow_ghost`) still pushed them back with the whole
+    pressure, so air at 100 m/s (Mach 0.29) stagnated at the face (+42 % pressure in 2D, +30 % in 1D:
+    nearly a wall's reflection)."""
+    share = jnp.zeros(x.shape[:1], x.dtype)
+    for axis, side in static.outflow_faces:
+        phi, centre, l_in = _cut(x, half, lo, hi, axis, side, static.mpm.grid.axisymmetric)
+        x, half = x.at[:, axis].set(centre), half.at[:, axis].set(l_in)
+        share = 1.0 - (1.0 - share) * (1.0 - phi)
+    return share, x, half
 
 
 def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: Static, layout: Layout):
     """Gas leaving the box. At a coupled face the part of a particle beyond it leaves
     (:func:`cut_at_coupled_faces`) with its share of the particle's mass, momentum and energy, which goes to
-    the reservoir of the face cell (000 Eqs. 49-51; :func:`receive` settles it into the Eulerian cell); a
-    particle wholly beyond is deleted. Through a face on the domain boundary a particle leaves the run whole
-    once its centre is outside (``boundary_out``). Structure fragments leave the run through any face (the
-    grid holds no solid outside the box): their momentum and energy are booked in ``boundary_out``, their
-    mass in ``structure_out``."""
+    the reservoir of the face cell (000 Eqs. 49-51; :func:`receive` settles it into the Eulerian cell); at a
+    face on an outflow face of the domain the part beyond leaves the run (:func:`cut_at_outflow_faces`,
+    ``boundary_out``); the particle keeps the part inside and is deleted once wholly beyond. A gas particle
+    whose centre is still outside after the cuts (through a wall face) leaves the run whole. Structure
+    fragments leave the run through any face (the grid holds no solid outside the box): their momentum and
+    energy are booked in ``boundary_out``, their mass in ``structure_out``."""
     P = state.particles
     d = static.mpm.grid.dim
     n = len(static.gas_material)
     slot = _gas_index(static, P.material)
     lo, hi = layout.box_lower[:d], layout.box_upper[:d]
-    outside = P.active & jnp.any((P.x[:, :d] < lo) | (P.x[:, :d] > hi), axis=1)
+    x0, half0 = P.x[:, :d], P.half_size[:, :d]
+    outside = P.active & jnp.any((x0 < lo) | (x0 > hi), axis=1)
     gas = P.active & (slot >= 0)
-    share, face, x_in, half_in = cut_at_coupled_faces(P.x[:, :d], P.half_size[:, :d], lo, hi, static)
+    share, face, x1, half1 = cut_at_coupled_faces(x0, half0, lo, hi, static)
     to_euler = gas & (face >= 0) & (share > 0.0)
+    x1, half1 = jnp.where(to_euler[:, None], x1, x0), jnp.where(to_euler[:, None], half1, half0)
+    out_share, x2, half2 = cut_at_outflow_faces(x1, half1, lo, hi, static)
+    leaving = gas & (out_share > 0.0)
+    x2, half2 = jnp.where(leaving[:, None], x2, x1), jnp.where(leaving[:, None], half2, half1)
     fragment = outside & (slot < 0)
-    inside_after = jnp.all((x_in >= lo) & (x_in <= hi), axis=1)
-    gone = (gas & ~to_euler & outside) | (to_euler & ~inside_after) | fragment  # whole, out of the run
-    to_euler = to_euler & ~gone
+    gone = (gas & ~jnp.all((x2 >= lo) & (x2 <= hi), axis=1)) | fragment  # whole, out of the run
+    to_euler, leaving = to_euler & ~gone, leaving & ~gone
+    to_reservoir = jnp.where(to_euler, share, 0.0)  # shares of each particle's content
+    to_boundary = jnp.where(gone, 1.0, jnp.where(leaving, (1.0 - to_reservoir) * out_share, 0.0))
     mass, mom, energy = particle_content(P)
     at = (jnp.where(to_euler, face, layout.face_out.shape[0]), jnp.clip(slot, 0, n - 1))  # (that index is dropped)
-    res = res._replace(mass=res.mass.at[at].add(share * mass, mode="drop"),
-                       momentum=res.momentum.at[at].add(share[:, None] * mom, mode="drop"),
-                       energy=res.energy.at[at].add(share * energy, mode="drop"))
-    left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(gone & (slot == j), mass, 0.0)) for j in range(n)]),
-                            jnp.sum(jnp.where(gone[:, None], mom, 0.0), axis=0)[:d],
-                            jnp.sum(jnp.where(gone, energy, 0.0))[None]])
-    keep = jnp.where(to_euler, 1.0 - share, 1.0)
-    whole = to_euler & (keep <= 0.0)
+    res = res._replace(mass=res.mass.at[at].add(to_reservoir * mass, mode="drop"),
+                       momentum=res.momentum.at[at].add(to_reservoir[:, None] * mom, mode="drop"),
+                       energy=res.energy.at[at].add(to_reservoir * energy, mode="drop"))
+    left = jnp.concatenate([jnp.stack([jnp.sum(jnp.where(slot == j, to_boundary * mass, 0.0)) for j in range(n)]),
+                            jnp.sum(to_boundary[:, None] * mom, axis=0)[:d],
+                            jnp.sum(to_boundary * energy)[None]])
+    keep = 1.0 - to_reservoir - to_boundary
+    whole = (to_euler | leaving) & (keep <= 0.0)
     P = P._replace(active=P.active & ~gone & ~whole, mass=P.mass * keep, volume0=P.volume0 * keep,
-                   x=P.x.at[:, :d].set(jnp.where(to_euler[:, None], x_in, P.x[:, :d])),
-                   half_size=P.half_size.at[:, :d].set(jnp.where(to_euler[:, None], half_in, P.half_size[:, :d])))
+                   x=P.x.at[:, :d].set(x2), half_size=P.half_size.at[:, :d].set(half2))
     return state._replace(particles=P), res, budget._replace(
         boundary_out=budget.boundary_out + left, structure_out=budget.structure_out + jnp.sum(jnp.where(
             fragment, mass, 0.0)))

@@ -93,6 +93,15 @@ def _pad3(a: np.ndarray) -> np.ndarray:
     return np.pad(a, ((0, 0), (0, 3 - a.shape[1])))
 
 
+def outflow_faces(setup: problem.Setup) -> tuple:
+    """(axis, side) of every box face that lies on an outflow face of the domain (its nodes carry the
+    mirror's area, ``setup.outflow_area``: -n A, positive on a lower face, negative on an upper one)."""
+    nd = setup.grid.dim
+    block = np.asarray(setup.outflow_area).reshape(setup.grid.nodes + (nd,))
+    return tuple((ax, side) for ax in range(nd) for side in (0, 1)
+                 if np.any(np.take(block[..., ax], -side, axis=ax) * (1.0 - 2.0 * side) > 0.0))
+
+
 def conserved_momentum_axes(geometry: int, ndim: int) -> tuple:
     """The axes whose momentum the equations conserve: all on a Cartesian grid; not the radial one of a
     cylindrical, spherical or r-z grid (the pressure's geometric source, the hoop stress)."""
@@ -151,7 +160,7 @@ class Cfdmp:
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))
         coupling = cp.Static(cfg, mcfg, faces, sizes, tuple(setup.box_lo), tuple(setup.box_hi), offset,
                              tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
-                             bool(np.any(setup.outflow_area)))
+                             outflow_faces(setup))
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
         return Static(coupling, flat, setup.capacity, _pool_margin(setup), tuple(setup.info["tracers"]))
 
