@@ -42,10 +42,11 @@ the 14 steps regrouped):
    * through a face where the gas leaves the box, the Eulerian cell outside
      keeps the scheme's transfer and its convective part becomes a debt of the
      face's reservoir; a gas particle that leaves the box through a coupled face
-     is deleted and its mass, momentum and energy (Eqs. 49-51) repay it; the
-     reservoir's balance is settled into the Eulerian cell as far as that cell
-     can take it (:func:`_settle`); through a face on the domain boundary a
-     particle leaves the run (``boundary_out``).
+     is cut at the face and the part beyond (its share of the mass, momentum and
+     energy, Eqs. 49-51) repays it; the reservoir's balance is settled into the
+     Eulerian cell as far as that cell can take it (:func:`_settle`); through a
+     box face on an outflow face of the domain the part beyond leaves the run
+     (``boundary_out``).
 
 Mass budget, exact up to round-off: Eulerian-only cells + particles +
 reservoirs + boundary_out = constant from activation on. Momentum and energy: the
@@ -147,6 +148,9 @@ class Budget(NamedTuple):
     #                             are in boundary_out; structure mass is not part of the gas budget's rows)
     mpm_step: jnp.ndarray  # (ndim + 1,) momentum and energy the MPM steps gave the particles (mpm_content),
     #                        but the flow-out mirror's traction (booked in boundary_out, with the opposite sign)
+    #                        and the reactions
+    reaction: jnp.ndarray  # (ndim + 1,) impulse and work of the MPM grid's wall faces and of the supports on the
+    #                        system (mpm.State.reaction)
 
 
 def mpm_content(P: mpm.Particles, ndim: int):

@@ -245,7 +245,7 @@ class Cfdmp:
         res = cp.Reservoirs(jnp.zeros((F, n), dtype), jnp.zeros((F, n, 3), dtype), jnp.zeros((F, n), dtype),
                             jnp.full((F, n), -1, jnp.int32))
         budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32),
-                           jnp.zeros((), dtype), jnp.zeros(d + 1, dtype))
+                           jnp.zeros((), dtype), jnp.zeros(d + 1, dtype), jnp.zeros(d + 1, dtype))
         zeros = jnp.zeros(n + d + 1, dtype)
         maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
@@ -283,13 +283,16 @@ class Cfdmp:
             return s, s.U
 
         def mpm_step(s, dt, source):  # the MPM step; its change of the particles' momentum and energy booked:
-            # the flow-out mirror's traction with what crossed the domain boundary, the rest as mpm_step
+            # the flow-out mirror's traction with what crossed the domain boundary, the reactions of the
+            # grid's wall faces and the supports, the rest as mpm_step
             before = cp.mpm_content(s.mpm.particles, d)
             ms = mpm.step(s.mpm, dt, params.mpm, mcfg, source)
             change = cp.mpm_content(ms.particles, d) - before
             boundary = ms.boundary_exchange - s.mpm.boundary_exchange
-            return ms, s.budget._replace(mpm_step=s.budget.mpm_step + change - boundary,
-                                         boundary_out=s.budget.boundary_out.at[n_gas:].add(-boundary))
+            reaction = ms.reaction - s.mpm.reaction
+            return ms, s.budget._replace(mpm_step=s.budget.mpm_step + change - boundary - reaction,
+                                         boundary_out=s.budget.boundary_out.at[n_gas:].add(-boundary),
+                                         reaction=s.budget.reaction + reaction)
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
             ms, budget = mpm_step(s, dt, lambda P, idx, w: cp.outflow_ghost(P, lay, cs, pref, (idx, w)))
@@ -322,7 +325,7 @@ class Cfdmp:
         def history_row(s):
             P = s.mpm.particles
             total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, lay, cs)
-            account = total + s.budget.boundary_out
+            account = (total + s.budget.boundary_out).at[n_gas:].add(-s.budget.reaction)
             scale = jnp.where(s.coupled, jnp.abs(s.baseline), 1.0)
             n = cfg.n_materials
             mass_residual = jnp.where(s.coupled, (jnp.sum(account[:n]) - jnp.sum(s.baseline[:n]))
@@ -344,7 +347,7 @@ class Cfdmp:
                    jnp.sum(s.budget.boundary_out[:n]), mass_residual,
                    euler[-1], particles[-1], reservoirs[-1], s.budget.boundary_out[-1], s.budget.pressure_transfer[-1],
                    energy_residual, s.budget.mpm_step[-1], jnp.where(s.coupled, transport[-1] / scale[-1], 0.0)]
-            row += momentum_residuals
+            row += momentum_residuals + list(s.budget.reaction)
             row += list(total[n:n + d])
             nst = cs.n_structure
             if nst:
@@ -377,6 +380,7 @@ class Cfdmp:
                 ("energy_budget_residual", "1"), ("energy_mpm_step", J), ("energy_transport_residual", "1")]
         for a in conserved_momentum_axes(GEOMETRY_CODE[setup.euler.grid.geometry], nd):
             cols += [(f"momentum_{AXES[a]}_budget_residual", "1"), (f"momentum_{AXES[a]}_transport_residual", "1")]
+        cols += [(f"reaction_impulse_{a}", mom) for a in AXES[:nd]] + [("reaction_work", J)]
         cols += [(f"momentum_{a}", mom) for a in AXES[:nd]]
         if setup.info["structure_particles"]:
             cols += [("structure_max_displacement", "m"), ("structure_max_damage", "1"),
@@ -497,7 +501,10 @@ class Cfdmp:
                "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,
                "budget": {
                    "accounts": "Eulerian-only cells + particles (gas and structures) + bridge reservoirs + what "
-                               "left through the domain boundary, against their sum at activation",
+                               "left through the domain boundary - the reactions of the MPM grid's wall faces and "
+                               "the supports, against their sum at activation",
+                   "reaction": {"impulse": [float(hist[f"reaction_impulse_{a}"][-1]) for a in AXES[:nd]],
+                                "work": float(hist["reaction_work"][-1])},
                    "mass_residual_relative": float(hist["mass_budget_residual"][-1]),
                    "max_mass_residual_relative": float(np.max(np.abs(hist["mass_budget_residual"]))),
                    "energy_residual_relative": float(hist["energy_budget_residual"][-1]),
@@ -505,9 +512,9 @@ class Cfdmp:
                    "energy_mpm_step": float(hist["energy_mpm_step"][-1]),
                    "transport": {
                        "accounts": "the sum above with the MPM steps' change of the particles' momentum and energy "
-                                   "(interface force, supports, the MPM scheme's non-conservation; the flow-out "
-                                   "mirror's traction with the boundary outflow) and the pressure part of the Eulerian "
-                                   "face transfer booked; momentum relative to sqrt(2 M E) at activation, conserved "
+                                   "(interface force, the MPM scheme's non-conservation; the flow-out mirror's "
+                                   "traction with the boundary outflow, the reactions apart) and the pressure part of "
+                                   "the Eulerian face transfer booked; momentum relative to sqrt(2 M E) at activation, conserved "
                                    "axes only, largest over the history samples",
                        "max_energy_residual_relative": float(np.max(np.abs(hist["energy_transport_residual"]))),
                        **{f"max_momentum_{AXES[a]}_residual_relative":
@@ -571,8 +578,13 @@ class Cfdmp:
         h = histories[0]
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")
-        ax.plot(h["time"] * 1e3, h["energy_budget_residual"], label="energy")
-        ax.set_xlabel("time [ms]"), ax.set_ylabel("budget residual (relative)"), ax.legend(), ax.grid(alpha=0.3)
+        ax.plot(h["time"] * 1e3, h["energy_transport_residual"], label="energy, transport")
+        ax.plot(h["time"] * 1e3, h["energy_budget_residual"], label="energy, coupling error")
+        for key in h:
+            if key.startswith("momentum_") and key.endswith("_budget_residual"):
+                ax.plot(h["time"] * 1e3, h[key], "--", label=f"momentum {key.split('_')[1]}, coupling error")
+        ax.set_xlabel("time [ms]"), ax.set_ylabel("budget residual (relative)"), ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(folder / "budget.png", dpi=120)
         plt.close(fig)

@@ -13,7 +13,8 @@ material, ``temperature`` (NaN for the other materials).
 
 Histories: kinetic, internal (stress and q work, incl. plastic), plastic work
 and external work, the energy balance kinetic + internal - initial - external
-work, mass and momentum; per tracer its displacement (summary: final and peak); per gauge (a point fixed
+work, mass and momentum, the reactions (impulse and work of the grid's fixed and slip faces and of the
+prescribed particles on the nodes, ``mpm.State.reaction``: an anvil's or a clamp's force); per tracer its displacement (summary: final and peak); per gauge (a point fixed
 in space) the pressure, density and velocity of the active particle nearest to
 it (NaN when none lies within one cell). Energies per unit area in 1D, per unit
 length in 2D plane strain, whole rings in r-z.
@@ -143,7 +144,8 @@ class MPM:
             P = s.mpm.particles
             tot = mpm.totals(P)
             e = mpm.energies(s.mpm)
-            row = [s.t, tot.kinetic, tot.internal, tot.plastic, e["external_work"], tot.mass, *tot.momentum[:d]]
+            row = [s.t, tot.kinetic, tot.internal, tot.plastic, e["external_work"], tot.mass, *tot.momentum[:d],
+                   *s.mpm.reaction]
             row += tracer_row(P, tracers, params.tracer_x0, d)
             if params.gauges.shape[0]:
                 dist = jnp.linalg.norm(P.x[None, :, :d] - params.gauges[:, None, :d], axis=2)
@@ -165,6 +167,7 @@ class MPM:
         cols = [("time", "s"), ("kinetic_energy", J), ("internal_energy", J), ("plastic_work", J),
                 ("external_work", J), ("mass", kg)]
         cols += [(f"momentum_{a}", _energy_unit(setup, "kg*m/s")) for a in axes]
+        cols += [(f"reaction_impulse_{a}", _energy_unit(setup, "kg*m/s")) for a in axes] + [("reaction_work", J)]
         cols += tracer_columns(len(setup.tracers), axes)
         for k in range(len(setup.gauges)):
             cols += [(f"gauge{k}_pressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
@@ -231,6 +234,9 @@ class MPM:
                # none in the continuum (its grid nodes are at rest), so a clamped body's balance is reported
                "energy_balance_relative": None if setup.info["driven"] else float(balance[-1] / scale),
                "momentum": [float(hist[f"momentum_{a}"][-1]) for a in axes],
+               # impulse and work of the grid's fixed/slip faces and the prescribed particles on the nodes
+               "reaction": {"impulse": [float(hist[f"reaction_impulse_{a}"][-1]) for a in axes],
+                            "work": float(hist["reaction_work"][-1])},
                "max_plastic_strain": float(np.max(np.asarray(P.point.plastic_strain)[on])),
                "max_damage": float(np.max(np.asarray(P.point.damage)[on])),
                "failed_particles": int(np.sum(np.asarray(P.point.damage)[on] >= 1.0))}

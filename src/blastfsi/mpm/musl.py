@@ -140,6 +140,8 @@ class State(NamedTuple):
     external_work: jnp.ndarray  # work of body force and traction since the start [J]
     boundary_exchange: jnp.ndarray  # (dim + 1,) impulse and work of the nodal sources' boundary force since
     #                                 the start (NodalSource.boundary)
+    reaction: jnp.ndarray  # (dim + 1,) impulse and work of the grid's face conditions and of the prescribed
+    #                        particles (supports, impactors) on the nodes since the start: the reactions
 
 
 class NodalSource(NamedTuple):
@@ -150,7 +152,11 @@ class NodalSource(NamedTuple):
     momentum: jnp.ndarray  # (num_nodes, dim) added to p_I, Eq. (38), and to the re-mapped momentum, Eq. (26)
     force: jnp.ndarray  # (num_nodes, dim) added to f_I, Eq. (39)
     boundary: jnp.ndarray | None = None  # (num_nodes, dim) the part of ``force`` applied from outside the
-    #   system (the traction of a flow-out face): its impulse and work go to State.boundary_exchange
+    #   system (the traction of a flow-out face): its impulse dt f_I and work go to State.boundary_exchange (what
+    #   face conditions or prescribed particles take away of it is in State.reaction). The whole impulse
+    #   counts, as an Eulerian boundary flux does: on a node that also carries mirror mass (the gas outside)
+    #   part of it moves that mass, and the same share of the particles' own force on the node, so for a
+    #   uniform state the two cancel.
 
 
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
@@ -267,7 +273,8 @@ def initialize(particles: Particles, params: Params, config: Config) -> State:
     c = wave_speed(particles.point, particles.material, params, config)
     p = particles._replace(wave_speed=jnp.where(particles.active, c, particles.wave_speed))
     return State(particles=p, external_work=jnp.zeros((), p.mass.dtype),
-                 boundary_exchange=jnp.zeros(config.grid.dim + 1, p.mass.dtype))
+                 boundary_exchange=jnp.zeros(config.grid.dim + 1, p.mass.dtype),
+                 reaction=jnp.zeros(config.grid.dim + 1, p.mass.dtype))
 
 
 def _constrain(v, p_fixed, m_fixed, grid: Grid, prescribed: bool):
@@ -471,10 +478,12 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     has = m_I > 0.0
     inv_m = jnp.where(has, 1.0 / jnp.where(has, m_I, 1.0), 0.0)[:, None]
     v_old = p_I * inv_m
-    v_new = _constrain((p_I + dt * f_I) * inv_m, p_fix, m_fix, grid, config.prescribed)  # Eq. (22)
+    v_free = (p_I + dt * f_I) * inv_m  # Eq. (22)
+    v_new = _constrain(v_free, p_fix, m_fix, grid, config.prescribed)
+    reaction = state.reaction + _impulse_and_work(m_I[:, None] * (v_new - v_free), v_old, v_new)
     exchange = state.boundary_exchange
     if source is not None and source.boundary is not None:
-        exchange = exchange + _boundary_exchange(dt * source.boundary, v_old, v_new, m_fix, grid, config.prescribed)
+        exchange = exchange + _impulse_and_work(dt * source.boundary, v_old, v_new)
     # G2P: Eq. (24), and Eq. (25) with the updated nodal velocity (ERRATA 000-5)
     table = [v_new - v_old, v_new]
     if config.blend:
@@ -536,21 +545,16 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     # the atmosphere's work on the model, -p_ref dV, with dV the particles' volume change (Eq. 29)
     expansion = jnp.sum(jnp.where(act, m / point.density, 0.0)) - jnp.sum(vol)
     work = jnp.sum(load * (x_p - P.x)) - params.reference_pressure * expansion
-    return State(particles=particles, external_work=state.external_work + work, boundary_exchange=exchange)
+    return State(particles=particles, external_work=state.external_work + work, boundary_exchange=exchange,
+                 reaction=reaction)
 
 
-def _boundary_exchange(impulse, v_old, v_new, m_fix, grid: Grid, prescribed: bool):
-    """(dim + 1,) impulse and work of a boundary force in one step. ``impulse``: dt f_I of every node. The
-    face conditions act on it as on the velocities (none on nodes moved by prescribed particles); its work is
-    taken on the mean of the old and new nodal velocities. The whole impulse counts, as a boundary flux of
-    the Eulerian scheme does: on a node that also carries mirror mass (the gas outside) part of it moves
-    that mass, not the particles, and the same share of the particles' own force on the node (Eq. 24 with
-    the mirror mass), so for a uniform state the two cancel."""
-    impulse = apply_boundaries(impulse, grid)
-    if prescribed:
-        impulse = jnp.where((m_fix > 0.0)[:, None], 0.0, impulse)
-    work = jnp.sum(impulse * 0.5 * (v_old + v_new))
-    return jnp.concatenate([jnp.sum(impulse, axis=0), work[None]])
+def _impulse_and_work(impulse, v_old, v_new):
+    """(dim + 1,) the sum of nodal impulses (num_nodes, dim) and their work on the mean of the old and new
+    nodal velocities."""
+    return jnp.concatenate([jnp.sum(impulse, axis=0), jnp.sum(impulse * 0.5 * (v_old + v_new))[None]])
+
+
 
 
 def stable_dt(state: State, params: Params, config: Config):
