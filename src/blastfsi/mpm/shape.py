@@ -10,8 +10,9 @@ Both are tensor products of 1D functions of the scaled distance to a node:
   (half the initial particle spacing, 0 < l <= h/2): 3 nodes per direction.
 
 Nodes outside the grid get weight 0; particles must stay inside the grid box
-(:func:`blastfsi.mpm.musl.first_fault` reports those that leave), and GIMP
-particles' domains should stay inside it too, else the partition of unity is lost.
+(:func:`blastfsi.mpm.musl.first_fault` reports those that leave). A GIMP domain
+that reaches past the grid's end is truncated to the grid (:func:`inside_grid`),
+so the partition of unity and sum_I grad N_I = 0 hold there too.
 """
 from __future__ import annotations
 
@@ -68,6 +69,18 @@ GIMP = Shape("gimp", 3, _gimp_basis)
 SHAPES = {s.name: s for s in (LINEAR, GIMP)}
 
 
+def inside_grid(xi, half, cells):
+    """The part of a GIMP domain [xi - l, xi + l] (cell units) inside the grid [0, cells], as its centre and
+    half-size; unchanged (bit for bit) for a domain inside. The weights of the part beyond the grid's end
+    would fall on nodes that do not exist: without the truncation the weights no longer sum to 1 and the
+    gradients to 0, so a particle pressed against a wall face, or leaving through a free one, was pushed by
+    its own stress (a block thrown at a fixed face: the particles' momentum change 15 % off the wall's
+    reaction, tests/test_mpm.py; docs/cfdmp.md, fragments leaving the box)."""
+    lo, hi = jnp.maximum(xi - half, 0.0), jnp.minimum(xi + half, float(cells))
+    past = (xi - half < 0.0) | (xi + half > cells)
+    return jnp.where(past, 0.5 * (lo + hi), xi), jnp.where(past, jnp.maximum(0.5 * (hi - lo), 1e-6 * half), half)
+
+
 def factors(x, half_size, grid, shape: Shape):
     """Per-direction factors of the stencil: for each grid direction j a tuple
     (node index times stride (k, n) int32, N (k, n), dN/dx (k, n)), zero outside the grid.
@@ -77,8 +90,10 @@ def factors(x, half_size, grid, shape: Shape):
     h, k = grid.cell_size, shape.nodes_per_dim
     out = []
     for j in range(grid.dim):
-        xi = (x[:, j] - grid.origin[j]) / h
-        first, N, dN = shape.basis(xi, half_size[:, j] / h, grid.cells[j])
+        xi, half = (x[:, j] - grid.origin[j]) / h, half_size[:, j] / h
+        if shape.nodes_per_dim == 3:  # GIMP
+            xi, half = inside_grid(xi, half, grid.cells[j])
+        first, N, dN = shape.basis(xi, half, grid.cells[j])
         node = first[None, :] + jnp.arange(k, dtype=first.dtype)[:, None]
         valid = (node >= 0) & (node <= grid.cells[j])
         out.append((grid.strides[j] * jnp.clip(node, 0, grid.cells[j]),
