@@ -63,7 +63,10 @@ model plus q work); kinetic + internal is conserved up to the scheme's
 dissipation (FLIP/MUSL and the grid's contact) when no external work is done.
 ``State.external_work`` accumulates the work of body force and traction
 sum_p (m_p b + V_p t_p / h) . dx_p and that of the atmosphere, -p_ref dV with
-V = sum_p m_p / rho_p; face conditions and prescribed velocities are not counted.
+V = sum_p m_p / rho_p; face conditions and prescribed velocities are not counted there:
+``State.reaction`` sums their impulse m_I (v_new - v_free) on the nodes and its work on the mean of the
+old and new nodal velocities (a wall's or a clamp's reaction), ``State.boundary_exchange`` that of a
+nodal source's boundary force (:class:`NodalSource`).
 
 Reference pressure (``Params.reference_pressure``, 0 by default): the model sits
 in an atmosphere at p_ref. A constant isotropic stress has no divergence, so
@@ -553,8 +556,6 @@ def _impulse_and_work(impulse, v_old, v_new):
     """(dim + 1,) the sum of nodal impulses (num_nodes, dim) and their work on the mean of the old and new
     nodal velocities."""
     return jnp.concatenate([jnp.sum(impulse, axis=0), jnp.sum(impulse * 0.5 * (v_old + v_new))[None]])
-
-
 
 
 def stable_dt(state: State, params: Params, config: Config):
