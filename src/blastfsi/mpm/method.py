@@ -233,6 +233,9 @@ class MPM:
                # a driven (prescribed, impactor) body does work that external_work does not count; a clamp does
                # none in the continuum (its grid nodes are at rest), so a clamped body's balance is reported
                "energy_balance_relative": None if setup.info["driven"] else float(balance[-1] / scale),
+               # the same less the reactions' work (grid faces and prescribed particles on the nodes): also for
+               # a driven body, whose driver's work is that of its nodes' reactions
+               "energy_balance_with_reactions_relative": float((balance[-1] - hist["reaction_work"][-1]) / scale),
                "momentum": [float(hist[f"momentum_{a}"][-1]) for a in axes],
                # impulse and work of the grid's fixed/slip faces and the prescribed particles on the nodes
                "reaction": {"impulse": [float(hist[f"reaction_impulse_{a}"][-1]) for a in axes],
