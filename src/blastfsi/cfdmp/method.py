@@ -118,13 +118,11 @@ def system_totals(U, P: mpm.Particles, res: cp.Reservoirs, layout: cp.Layout, st
     rows = jnp.concatenate([U[:n], U[lay.mom:lay.mom + d], U[lay.energy:lay.energy + 1]])
     V = layout.cell_volume.reshape(cfg.shape)
     euler = jnp.sum(jnp.where(layout.outside, rows * V, 0.0), axis=axes)
-    mass, mom, energy = cp.particle_content(P)
     slot = cp._gas_index(static, P.material)
     on = P.active
-    per_material = [jnp.sum(jnp.where(on & (slot == k), mass, 0.0)) for k in range(n)]
-    structure = jnp.sum(jnp.where(on & (slot < 0), mass, 0.0))
-    particles = jnp.concatenate([jnp.stack(per_material), jnp.sum(jnp.where(on[:, None], mom, 0.0), axis=0)[:d],
-                                 jnp.sum(jnp.where(on, energy, 0.0))[None]])
+    per_material = [jnp.sum(jnp.where(on & (slot == k), P.mass, 0.0)) for k in range(n)]
+    structure = jnp.sum(jnp.where(on & (slot < 0), P.mass, 0.0))
+    particles = jnp.concatenate([jnp.stack(per_material), cp.mpm_content(P, d)])
     reservoirs = jnp.concatenate([jnp.sum(res.mass, axis=0), jnp.sum(res.momentum, axis=(0, 1))[:d],
                                   jnp.sum(res.energy)[None]])
     return euler + particles + reservoirs, euler, particles, reservoirs, structure
@@ -268,7 +266,7 @@ class Cfdmp:
         d = len(cfg.shape)
         pref = params.mpm.reference_pressure
         conserved = conserved_momentum_axes(cfg.geometry, d)
-        n_gas = cfg.n_materials
+        n = cfg.n_materials
 
         def stable_dt(s):
             dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
@@ -291,7 +289,7 @@ class Cfdmp:
             boundary = ms.boundary_exchange - s.mpm.boundary_exchange
             reaction = ms.reaction - s.mpm.reaction
             return ms, s.budget._replace(mpm_step=s.budget.mpm_step + change - boundary - reaction,
-                                         boundary_out=s.budget.boundary_out.at[n_gas:].add(-boundary),
+                                         boundary_out=s.budget.boundary_out.at[n:].add(-boundary),
                                          reaction=s.budget.reaction + reaction)
 
         def mpm_only(s, dt):  # the box is the whole domain: MPM everywhere
@@ -325,9 +323,8 @@ class Cfdmp:
         def history_row(s):
             P = s.mpm.particles
             total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, lay, cs)
-            account = (total + s.budget.boundary_out).at[n_gas:].add(-s.budget.reaction)
+            account = (total + s.budget.boundary_out).at[n:].add(-s.budget.reaction)
             scale = jnp.where(s.coupled, jnp.abs(s.baseline), 1.0)
-            n = cfg.n_materials
             mass_residual = jnp.where(s.coupled, (jnp.sum(account[:n]) - jnp.sum(s.baseline[:n]))
                                       / jnp.sum(scale[:n]), 0.0)
             energy_residual = jnp.where(s.coupled, (account[-1] - s.baseline[-1]) / scale[-1], 0.0)
@@ -492,6 +489,7 @@ class Cfdmp:
         coupled = np.asarray(hist["coupled"]) > 0.5
         n = len(e.materials)
         nd = e.grid.ndim
+        conserved = [AXES[a] for a in conserved_momentum_axes(GEOMETRY_CODE[e.grid.geometry], nd)]
         baseline = np.asarray(state.baseline)
         out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
                "dx": e.grid.dx, "bridge_cells": setup.info["bridge_cells"],
@@ -517,11 +515,10 @@ class Cfdmp:
                                    "the Eulerian face transfer booked; momentum relative to sqrt(2 M E) at activation, conserved "
                                    "axes only, largest over the history samples",
                        "max_energy_residual_relative": float(np.max(np.abs(hist["energy_transport_residual"]))),
-                       **{f"max_momentum_{AXES[a]}_residual_relative":
-                          float(np.max(np.abs(hist[f"momentum_{AXES[a]}_transport_residual"])))
-                          for a in conserved_momentum_axes(GEOMETRY_CODE[e.grid.geometry], nd)}},
-                   **{f"momentum_{AXES[a]}_residual_relative": float(hist[f"momentum_{AXES[a]}_budget_residual"][-1])
-                      for a in conserved_momentum_axes(GEOMETRY_CODE[e.grid.geometry], nd)},
+                       **{f"max_momentum_{a}_residual_relative":
+                          float(np.max(np.abs(hist[f"momentum_{a}_transport_residual"]))) for a in conserved}},
+                   **{f"momentum_{a}_residual_relative": float(hist[f"momentum_{a}_budget_residual"][-1])
+                      for a in conserved},
                    "mass_at_activation": float(baseline[:n].sum()), "energy_at_activation": float(baseline[-1]),
                    "mass_boundary_out": float(hist["mass_boundary_out"][-1]),
                    "mass_in_reservoirs": float(hist["mass_reservoirs"][-1]),

@@ -42,15 +42,28 @@ def _linear_basis(xi, half, cells):
     return first.astype(jnp.int32), [1.0 - f, f], [-one, one]
 
 
+def inside_grid(xi, half, cells):
+    """The part of a GIMP domain [xi - l, xi + l] (cell units) inside the grid [0, cells], as its centre and
+    half-size; unchanged (bit for bit) for a domain inside. The weights of the part beyond the grid's end
+    would fall on nodes that do not exist: without the truncation the weights no longer sum to 1 and the
+    gradients to 0, so a particle pressed against a wall face, or leaving through a free one, was pushed by
+    its own stress (a block thrown at a fixed face: the particles' momentum change 15 % off the wall's
+    reaction, tests/test_mpm.py; docs/cfdmp.md, fragments leaving the box)."""
+    lo, hi = jnp.maximum(xi - half, 0.0), jnp.minimum(xi + half, float(cells))
+    past = (xi - half < 0.0) | (xi + half > cells)
+    return jnp.where(past, 0.5 * (lo + hi), xi), jnp.where(past, jnp.maximum(0.5 * (hi - lo), 1e-6 * half), half)
+
+
 def _gimp_basis(xi, half, cells):
     """uGIMP weight in one direction (Steffen et al. 2008, Eq. 13) in cell units,
     r = xi - i the particle-to-node distance, l = half:
     N = 1 - (r^2 + l^2) / (2 l)      for |r| < l
     N = 1 - |r|                      for l <= |r| < 1 - l
     N = (1 + l - |r|)^2 / (4 l)      for 1 - l <= |r| < 1 + l, else 0.
+    The domain is first truncated to the grid (:func:`inside_grid`).
     """
+    xi, l = inside_grid(xi, half, cells)
     first = jnp.floor(xi + 0.5).astype(jnp.int32) - 1
-    l = half
     N, dN = [], []
     for a in range(3):
         r = xi - (first + a)  # particle minus node, cell units
@@ -69,18 +82,6 @@ GIMP = Shape("gimp", 3, _gimp_basis)
 SHAPES = {s.name: s for s in (LINEAR, GIMP)}
 
 
-def inside_grid(xi, half, cells):
-    """The part of a GIMP domain [xi - l, xi + l] (cell units) inside the grid [0, cells], as its centre and
-    half-size; unchanged (bit for bit) for a domain inside. The weights of the part beyond the grid's end
-    would fall on nodes that do not exist: without the truncation the weights no longer sum to 1 and the
-    gradients to 0, so a particle pressed against a wall face, or leaving through a free one, was pushed by
-    its own stress (a block thrown at a fixed face: the particles' momentum change 15 % off the wall's
-    reaction, tests/test_mpm.py; docs/cfdmp.md, fragments leaving the box)."""
-    lo, hi = jnp.maximum(xi - half, 0.0), jnp.minimum(xi + half, float(cells))
-    past = (xi - half < 0.0) | (xi + half > cells)
-    return jnp.where(past, 0.5 * (lo + hi), xi), jnp.where(past, jnp.maximum(0.5 * (hi - lo), 1e-6 * half), half)
-
-
 def factors(x, half_size, grid, shape: Shape):
     """Per-direction factors of the stencil: for each grid direction j a tuple
     (node index times stride (k, n) int32, N (k, n), dN/dx (k, n)), zero outside the grid.
@@ -90,10 +91,8 @@ def factors(x, half_size, grid, shape: Shape):
     h, k = grid.cell_size, shape.nodes_per_dim
     out = []
     for j in range(grid.dim):
-        xi, half = (x[:, j] - grid.origin[j]) / h, half_size[:, j] / h
-        if shape.nodes_per_dim == 3:  # GIMP
-            xi, half = inside_grid(xi, half, grid.cells[j])
-        first, N, dN = shape.basis(xi, half, grid.cells[j])
+        xi = (x[:, j] - grid.origin[j]) / h
+        first, N, dN = shape.basis(xi, half_size[:, j] / h, grid.cells[j])
         node = first[None, :] + jnp.arange(k, dtype=first.dtype)[:, None]
         valid = (node >= 0) & (node <= grid.cells[j])
         out.append((grid.strides[j] * jnp.clip(node, 0, grid.cells[j]),
