@@ -44,8 +44,6 @@ def shift(x, axis, start, length):
     return _slice(x, axis, start, start + length)
 
 
-
-
 def extend(x, axis, kinds, lo, hi, sign=None):
     """``x`` with ``lo`` ghost cells below and ``hi`` above along ``axis`` (the values of :func:`pad`)."""
     lo_kind, hi_kind = kinds

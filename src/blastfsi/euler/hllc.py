@@ -39,6 +39,8 @@ import jax.numpy as jnp
 
 from blastfsi.euler import geometry
 from blastfsi.euler.boundaries import pad, shift
+from blastfsi.euler.lax_wendroff import blocked
+from blastfsi.xla import materialise
 from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
 
@@ -164,33 +166,49 @@ def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
     """Semi-discrete right-hand side L(U) of a tuple of conservative rows; record (static): return
     (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n.
 
-    The whole grid at once: sweeping it block by block (so the temporaries stay in cache) made the
-    step 2-2.5x slower with jax 0.10 on this CPU (2D 200^2 to 1024^2, 3D 64^3 and 128^3, docs/euler.md).
+    Each axis is swept block by block on grids of more than BLOCKED_ABOVE cells (the blocks of
+    lax_wendroff.blocked: its ghost cells, face states, fluxes and their divergence stay in cache; one
+    read of the primitive rows and one update of L per block). Within a sweep the fluxes are
+    materialised once (:func:`blastfsi.xla.materialise`), not recomputed by the two faces of every cell
+    that read them.
     """
     cells = primitive_rows(rows, eos_r, lay)
     nm, dtype = lay.n, rows[0].dtype
     nw = len(cells) - 2
-    p = cells[nm + lay.ndim]
-    total, fluxes = [0.0] * lay.nvar, []
+    alpha = (rows[lay.alpha],) if nm == 2 else ()
+    total, fluxes = tuple(jnp.zeros_like(x) for x in rows), []
     for axis in range(lay.ndim):
-        nrm = lay.mom + axis
-        padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
         n = cfg.shape[axis]
-        flux, u_face = axis_flux(padded, nw, eos_r, cfg, lay, axis)
-        fluxes.append(flux)
-        radial = axis == 0 and cfg.geometry != CARTESIAN
-        if radial:
-            gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
-        for r in range(lay.nvar):
-            f_hi, f_lo = shift(flux[r], axis, 1, n), shift(flux[r], axis, 0, n)
-            if radial and r == nrm:
-                f_hi, f_lo = f_hi - p, f_lo - p  # pressure force p (A+ - A-)/V on the radial momentum
-            div = gp * f_hi - gm * f_lo if radial else f_hi - f_lo
-            if r == lay.alpha:
-                u_hi, u_lo = shift(u_face, axis, 1, n), shift(u_face, axis, 0, n)
-                div = div - rows[r] * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
-            total[r] = total[r] - div / cfg.dx
-    return (tuple(total), tuple(fluxes)) if record else tuple(total)
+        face_shape = tuple(m + (d == axis) for d, m in enumerate(rows[0].shape))
+        outs = total + (tuple(jnp.zeros(face_shape, dtype) for _ in rows) if record else ())
+        sweep = functools.partial(_sweep, nw=nw, eos_r=eos_r, cfg=cfg, lay=lay, axis=axis, record=record)
+        outs = blocked(sweep, cells + alpha, outs, cfg, axis)
+        total = outs[:lay.nvar]
+        fluxes.append(outs[lay.nvar:])
+    return (total, tuple(fluxes)) if record else total
+
+
+def _sweep(ins, outs, nw, eos_r, cfg: Config, lay, axis, record):
+    """One axis's flux divergence added to L (outs[:nvar]; record: the flux rows in outs[nvar:]) of a block
+    spanning the axis: ins = primitive rows [, products fraction row]."""
+    nm, n = lay.n, cfg.shape[axis]
+    cells, p = ins[:nw + 2], ins[nm + lay.ndim]
+    padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
+    flux, u_face = materialise(lambda z: axis_flux(z, nw, eos_r, cfg, lay, axis), padded)
+    radial = axis == 0 and cfg.geometry != CARTESIAN
+    if radial:
+        gp, gm = geometry.flux_factors(cfg, 0, n, p.dtype)
+    new = []
+    for r in range(lay.nvar):
+        f_hi, f_lo = shift(flux[r], axis, 1, n), shift(flux[r], axis, 0, n)
+        if radial and r == lay.mom + axis:
+            f_hi, f_lo = f_hi - p, f_lo - p  # pressure force p (A+ - A-)/V on the radial momentum
+        div = gp * f_hi - gm * f_lo if radial else f_hi - f_lo
+        if r == lay.alpha:
+            u_hi, u_lo = shift(u_face, axis, 1, n), shift(u_face, axis, 0, n)
+            div = div - ins[-1] * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
+        new.append(outs[r] - div / cfg.dx)
+    return tuple(new) + (tuple(flux) if record else ())
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):

@@ -102,6 +102,7 @@ from blastfsi.mpm.grid import Grid, apply_boundaries, inside
 from blastfsi.mpm.particles import ParticleError, Particles, totals
 from blastfsi.mpm.shape import SHAPES, Shape, expand, factors, linear_cell
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC, bulk_viscosity, signal_speed
+from blastfsi.xla import materialise
 
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))  # [xx, yy, zz, yz, xz, xy]
 
@@ -338,27 +339,11 @@ def _pad3(columns):
     return jnp.stack(list(columns) + [zero] * (3 - len(columns)), axis=1)
 
 
-def materialise(compute, operand, nonempty):
-    """``compute(operand)`` evaluated once and kept in memory, not fused into its consumers.
-
-    XLA:CPU fuses an elementwise producer into each of its consumers, so a value read by
-    many fusions (the basis functions, floor, clip and piecewise polynomials; the strain
-    increments, each a stencil sum of gathered nodal velocities) is recomputed inside every
-    one of them, and it strips optimization barriers. A conditional is a boundary fusion
-    cannot cross: ``compute`` runs in one branch (taken when ``nonempty``; the other returns
-    zeros of the same shapes, right for an empty pool).
-    """
-    def zeros(a):
-        return jax.tree_util.tree_map(lambda z: jnp.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
-
-    return jax.lax.cond(nonempty, compute, zeros, operand)
-
-
 def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     """:func:`stencil` of the active particles (zero weights for inactive ones).
 
     The per-direction factors (k values per particle and direction) are
-    materialised (:func:`materialise`), not recomputed in each of the ~20
+    materialised (:func:`blastfsi.xla.materialise`), not recomputed in each of the ~20
     per-channel fusions that read them; their tensor products stay cheap
     enough to be fused into the consumers.
     """

@@ -1,0 +1,26 @@
+"""Helpers that steer XLA's fusion (shared by the Eulerian and MPM kernels)."""
+from __future__ import annotations
+
+import jax
+
+
+def materialise(compute, operand, taken=None):
+    """``compute(operand)`` evaluated once and kept in memory, not fused into its consumers.
+
+    XLA:CPU fuses an elementwise producer into each of its consumers, so a value read by
+    many fusions, or by one fusion at several offsets (an Eulerian face flux, read by the two
+    cells beside the face; the MPM basis functions and strain increments, read by ~20
+    per-channel fusions), is recomputed inside every one of them; and it strips optimization
+    barriers. A conditional is a boundary fusion cannot cross. ``taken``: None (both branches
+    are ``compute``, so the predicate -- a value of the operand XLA cannot fold -- does not
+    change the result), or a traced boolean under which ``compute`` runs, zeros of the same
+    shapes otherwise (e.g. an empty particle pool).
+    """
+    if taken is None:
+        leaf = jax.tree_util.tree_leaves(operand)[0]
+        return jax.lax.cond(leaf.ravel()[0] == leaf.ravel()[0], compute, compute, operand)
+
+    def zeros(a):
+        return jax.tree_util.tree_map(lambda z: jax.numpy.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
+
+    return jax.lax.cond(taken, compute, zeros, operand)
