@@ -199,17 +199,19 @@ def test_recording_leaves_the_step_unchanged(scheme, case):
         assert np.max(np.abs(U_new[r] - U_step[r])) <= 8 * np.finfo(float).eps * np.max(np.abs(U_step[r]))
 
 
+@pytest.mark.parametrize("scheme", [euler.LAX_WENDROFF, euler.HLLC_MUSCL])
 @pytest.mark.parametrize("case", ["2d", "axisymmetric"])
-def test_blocked_lax_wendroff_sweeps_equal_the_whole_grid(case, monkeypatch):
-    """Lax-Wendroff sweeps grids of more than lax_wendroff.BLOCKED_ABOVE cells block by block (a loop over
-    slabs along another axis, updated in place). The blocks must give the whole-grid step and transfers: the
+def test_blocked_sweeps_equal_the_whole_grid(scheme, case, monkeypatch):
+    """Both schemes sweep grids of more than blocking.BLOCKED_ABOVE cells block by block (a loop over
+    slabs along another axis, updated in place: Lax-Wendroff's directional operators, HLLC-MUSCL's flux
+    divergence of each axis). The blocks must give the whole-grid step and transfers: the
     same per-cell arithmetic, so equal up to how XLA contracts multiply-adds (a few ulp of each row's scale,
     as in test_recording_leaves_the_step_unchanged). The shipped threshold leaves every test grid whole, so
     the blocks are forced here: several planes per block on one axis, one plane on the other."""
-    from blastfsi.euler import lax_wendroff
+    from blastfsi.euler import blocking
 
     shape, geom, bc, n = CASES[case]
-    cfg = euler.Config(shape, 0.01, geom, bc, euler.LAX_WENDROFF, n, (0.0,) * len(shape))
+    cfg = euler.Config(shape, 0.01, geom, bc, scheme, n, (0.0,) * len(shape))
     U, prm = initial_state(cfg)
     dt = stable_dt(U, prm, cfg)
 
@@ -219,9 +221,9 @@ def test_blocked_lax_wendroff_sweeps_equal_the_whole_grid(case, monkeypatch):
         return np.asarray(plain), np.asarray(recorded[0]), [np.asarray(t) for t in recorded[1]]
 
     whole = both()
-    monkeypatch.setattr(lax_wendroff, "BLOCKED_ABOVE", 0)
-    monkeypatch.setattr(lax_wendroff, "BLOCK_CELLS", 2 * min(shape))
-    assert all(lax_wendroff.blocks(cfg, a) is not None for a in range(len(shape)))
+    monkeypatch.setattr(blocking, "BLOCKED_ABOVE", 0)
+    monkeypatch.setattr(blocking, "BLOCK_CELLS", 2 * min(shape))
+    assert all(blocking.blocks(cfg, a) is not None for a in range(len(shape)))
     blocked = both()
     tol = 8 * np.finfo(float).eps
     for w, b in zip(whole[:2] + tuple(whole[2]), blocked[:2] + tuple(blocked[2])):

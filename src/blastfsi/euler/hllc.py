@@ -38,8 +38,8 @@ import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
+from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import pad, shift
-from blastfsi.euler.lax_wendroff import blocked
 from blastfsi.xla import materialise
 from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
@@ -167,7 +167,7 @@ def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
     (L(U), fluxes), fluxes per axis the flux rows at its faces 0..n.
 
     Each axis is swept block by block on grids of more than BLOCKED_ABOVE cells (the blocks of
-    lax_wendroff.blocked: its ghost cells, face states, fluxes and their divergence stay in cache; one
+    blocking.blocked: its ghost cells, face states, fluxes and their divergence stay in cache; one
     read of the primitive rows and one update of L per block). Within a sweep the fluxes are
     materialised once (:func:`blastfsi.xla.materialise`), not recomputed by the two faces of every cell
     that read them.
@@ -178,7 +178,6 @@ def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
     alpha = (rows[lay.alpha],) if nm == 2 else ()
     total, fluxes = tuple(jnp.zeros_like(x) for x in rows), []
     for axis in range(lay.ndim):
-        n = cfg.shape[axis]
         face_shape = tuple(m + (d == axis) for d, m in enumerate(rows[0].shape))
         outs = total + (tuple(jnp.zeros(face_shape, dtype) for _ in rows) if record else ())
         sweep = functools.partial(_sweep, nw=nw, eos_r=eos_r, cfg=cfg, lay=lay, axis=axis, record=record)
