@@ -353,6 +353,7 @@ def interface_source(prim_flat: dict, layout: Layout, static: Static, reference)
     if grid.axisymmetric:  # the hoop stress -p of the ring cells, as in the particles' r-momentum (mpm.musl)
         force[0] = force[0] + scatter(w * (p * V / layout.ring_radius))
     force = jnp.stack(force, axis=1)
+
     def source(P: mpm.Particles, idx, w) -> mpm.musl.NodalSource:
         ghost = outflow_ghost(P, layout, static, reference, (idx, w))
         return mpm.musl.NodalSource(mass + ghost.mass, mom + ghost.momentum, force + ghost.force, ghost.boundary)
