@@ -458,3 +458,20 @@ def test_bad_input_errors_name_the_parameter():
         fluid.initial_history(3, 0.0, 0.0)
     with pytest.raises(ValueError, match="lighting_time"):
         fluid.initial_history(3, -1.0, 1e-3)
+
+
+def test_jc_radial_return_converges_in_few_iterations(monkeypatch):
+    """The Newton iteration's start (1/x0 = 1/x_elastic + 1/x_hardening) puts first-yield and hardened
+    particles, with roots from 1e-16 to 1e-3, on the yield surface to round-off within 8 iterations (from the
+    perfectly plastic bound, the tiny roots took 10-13: Newton in ln d eps_p walks down about one e-fold a
+    step)."""
+    monkeypatch.setattr(johnson_cook, "MAX_ITERATIONS", 8)
+    excess = np.array([1e-12, 1e-9, 1e-6, 1e-3, 1e-1])
+    eps_p = np.repeat([0.0, 1e-4, 0.05], excess.size)
+    dt, temp = 1e-7, np.full(eps_p.size, JC_MAT.room_temperature)
+    y0 = np.asarray(johnson_cook.flow_stress(eps_p, 0.0, temp, JC))
+    q_trial = y0 * (1.0 + np.tile(excess, 3))
+    x = np.asarray(johnson_cook.plastic_increment(q_trial, eps_p, dt, temp, JC))
+    assert np.all(x > 0.0)
+    flow = np.asarray(johnson_cook.flow_stress(eps_p + x, x / dt, temp, JC))
+    np.testing.assert_allclose(q_trial - 3.0 * JC.shear_modulus * x, flow, rtol=1e-13)
