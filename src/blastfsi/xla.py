@@ -1,6 +1,9 @@
 """Helpers that steer XLA's fusion (shared by the Eulerian and MPM kernels)."""
 from __future__ import annotations
 
+import functools
+import operator
+
 import jax
 
 
@@ -24,3 +27,12 @@ def materialise(compute, operand, taken=None):
         return jax.tree_util.tree_map(lambda z: jax.numpy.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
 
     return jax.lax.cond(taken, compute, zeros, operand)
+
+
+def row_sum(a):
+    """Sum over the short trailing axis of an (n, k) array as k - 1 elementwise adds.
+
+    XLA:CPU (jax 0.10) sends such reductions to its YNNPACK library kernels, which took 60-90 ns
+    per row here (a 38 000-particle von Mises sum 3.4 ms); the adds fuse into their neighbours.
+    """
+    return functools.reduce(operator.add, [a[..., k] for k in range(a.shape[-1])])

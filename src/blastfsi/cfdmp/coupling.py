@@ -73,6 +73,7 @@ from blastfsi.eos import jwl
 from blastfsi.euler.config import layout as row_layout
 from blastfsi.euler.mixture import cell_state, cold_terms, eos_rows
 from blastfsi.mpm.musl import wave_speed
+from blastfsi.xla import row_sum
 
 INFLOW_MACH = 0.01  # inflow Mach number over which a flow-out face's mirror gas is gone (outflow_ghost)
 FULL_FILL = 0.5  # share of a flow-out face node's half support filled with gas from which its mirror traction
@@ -317,9 +318,9 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     p_node = jnp.where(v_node > 0.0, nodal[:, 3] / jnp.where(v_node > 0.0, v_node, 1.0), 0.0)
     # u_n / c as a ratio of the nodal sums (m u_n) / (m c): no division by a node's (possibly tiny) mass;
     # outflow_area is -A n_out per axis
-    area = jnp.sqrt(jnp.sum(layout.outflow_area ** 2, axis=1))
+    area = jnp.sqrt(row_sum(layout.outflow_area ** 2))
     area = jnp.where(area > 0.0, area, 1.0)  # (nodes off such faces: any non-zero value, their area rows are 0)
-    outward = -jnp.sum(momentum * layout.outflow_area, axis=1) / area
+    outward = -row_sum(momentum * layout.outflow_area) / area
     ok = mc_node > 0.0
     share = jnp.where(ok, jnp.clip(1.0 + outward / (INFLOW_MACH * jnp.where(ok, mc_node, 1.0)), 0.0, 1.0), 1.0)
     # a node on k such faces gets 1 / 2^k of its support from the particles: the mirrors add 2^k - 1 times that
@@ -542,7 +543,7 @@ def boundary_outflow(T, static: Static, layout: Layout):
 
 def particle_content(P: mpm.Particles):
     """(mass, momentum (n, 3), total energy) of every particle."""
-    ke = 0.5 * jnp.sum(P.v * P.v, axis=1)
+    ke = 0.5 * row_sum(P.v * P.v)
     return P.mass, P.mass[:, None] * P.v, P.mass * (P.point.energy + ke)
 
 

@@ -97,12 +97,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from blastfsi.constitutive import Model, PointState
+from blastfsi.constitutive import tensor as T
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.grid import Grid, apply_boundaries, inside
 from blastfsi.mpm.particles import ParticleError, Particles, totals
 from blastfsi.mpm.shape import SHAPES, Shape, expand, factors, linear_cell
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC, bulk_viscosity, signal_speed
-from blastfsi.xla import materialise
+from blastfsi.xla import materialise, row_sum
 
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))  # [xx, yy, zz, yz, xz, xy]
 
@@ -219,13 +220,6 @@ def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=D
 def _component(stress, i, j):
     """sigma_ij, (n,), from (n, 6) Voigt [xx, yy, zz, yz, xz, xy]."""
     return stress[:, VOIGT.index((min(i, j), max(i, j)))]
-
-
-def von_mises(s):
-    """Equivalent stress sqrt(3 J2) of (n, 6) Voigt stresses."""
-    p = (s[:, 0] + s[:, 1] + s[:, 2]) / 3.0
-    dev = s[:, :3] - p[:, None]
-    return jnp.sqrt(1.5 * (jnp.sum(dev * dev, axis=1) + 2.0 * jnp.sum(s[:, 3:] ** 2, axis=1)))
 
 
 def _select(mask, a, b):
@@ -485,7 +479,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if config.blend:
         m_a = nodal[:, blend_at]
         u_I = nodal[:, blend_at + 1:blend_at + 1 + d] / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]
-        table.append(jnp.sum(v_new * u_I, axis=1, keepdims=True))
+        table.append(row_sum(v_new * u_I)[:, None])
     moved = grid_to_particle(idx, w, jnp.concatenate(table, axis=1), combined)
     increment, pic = _pad3(moved[:d]), _pad3(moved[d:2 * d])  # S (n - g), S n
     v_flip = P.v + increment
@@ -493,8 +487,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         old_grid = pic - increment  # S g
         delta = P.v - old_grid
         v_p = jnp.where(act[:, None], v_flip - alpha[:, None] * delta, P.v)
-        blend_heat = (alpha * (moved[2 * d] - jnp.sum(pic * old_grid, axis=1))
-                      + (alpha - 0.5 * alpha ** 2) * jnp.sum(delta * delta, axis=1))
+        blend_heat = (alpha * (moved[2 * d] - row_sum(pic * old_grid))
+                      + (alpha - 0.5 * alpha ** 2) * row_sum(delta * delta))
     else:
         v_p, blend_heat = jnp.where(act[:, None], v_flip, P.v), 0.0
     x_p = jnp.where(act[:, None], P.x + dt * pic, P.x)
@@ -532,7 +526,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     rate = dvol / dt
     q = bulk_viscosity(rho, c, rate, grid.cell_size, params.q_quadratic, params.q_linear)
     d_plastic = new.plastic_strain - ps.plastic_strain
-    plastic_work = P.plastic_work + von_mises(new.stress) * d_plastic / rho
+    plastic_work = P.plastic_work + T.von_mises(T.deviator(new.stress)) * d_plastic / rho
     point = jax.tree_util.tree_map(lambda a, b: _select(act, a, b), new, ps)
     particles = P._replace(
         x=x_p, v=v_p, point=point, q=jnp.where(act, q, P.q), vol_rate=jnp.where(act, rate, P.vol_rate),
@@ -557,7 +551,7 @@ def stable_dt(state: State, params: Params, config: Config):
     active particle is non-physical (see :func:`first_fault`), so the reduction
     doubles as the fault check."""
     P = state.particles
-    speed = signal_speed(P.wave_speed, jnp.sqrt(jnp.sum(P.v * P.v, axis=1)), P.vol_rate, config.grid.cell_size,
+    speed = signal_speed(P.wave_speed, jnp.sqrt(row_sum(P.v * P.v)), P.vol_rate, config.grid.cell_size,
                          params.q_quadratic, params.q_linear)
     fastest = jnp.max(jnp.where(P.active, speed, 0.0))
     dt = params.cfl * config.grid.cell_size / fastest

@@ -43,6 +43,7 @@ import operator
 import jax.numpy as jnp
 
 from blastfsi.constitutive import PointState
+from blastfsi.xla import row_sum
 
 MIXED = 0.01  # minority share of a node's gas compliance from which its particles relax fully (chi_I = 1)
 MAX_VOLUME_CHANGE = 0.25  # largest relative volume change of a particle in one relaxation
@@ -81,9 +82,9 @@ def relax(point: PointState, mass, material, wave_speed, idx, w, gas: tuple, num
     a_I, b_I = nodal[:, 0::2], nodal[:, 1::2]  # (num_nodes, n_gas) each
     has = a_I > 0.0
     p_mean = jnp.where(has, b_I / jnp.where(has, a_I, 1.0), 0.0)  # pbar_kI
-    a_all = jnp.sum(a_I, axis=1)
+    a_all = row_sum(a_I)
     safe_a = jnp.where(a_all > 0.0, a_all, 1.0)
-    p_star = jnp.sum(b_I, axis=1) / safe_a  # p*_I
+    p_star = row_sum(b_I) / safe_a  # p*_I
     gap = jnp.where(has, p_mean - p_star[:, None], 0.0)
     chi = jnp.clip((1.0 - jnp.max(a_I, axis=1) / safe_a) / MIXED, 0.0, 1.0)
     softest = jnp.zeros(num_nodes, p.dtype).at[idx.reshape(-1)].max(
