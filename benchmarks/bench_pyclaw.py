@@ -2,6 +2,12 @@
 
     /tmp/clawenv/bin/python benchmarks/bench_pyclaw.py --cells 400 --out benchmarks/pyclaw_blast2d.npz
 
+PyClaw is not a dependency of blastfsi; its own environment, on a fresh Debian machine (Clawpack
+builds its Riemann solvers from Fortran; as used 2026-12-04):
+
+    apt-get install -y gfortran
+    python3 -m venv /tmp/clawenv && /tmp/clawenv/bin/pip install numpy clawpack==5.14.0
+
 Problem (the same as ``bench_euler.py --pyclaw``): ideal gas gamma = 1.4 on [-1, 1]^2,
 rho = 1 everywhere, u = 0, p = 10 in the cells whose centre lies at r < 0.2 and
 p = 1 elsewhere; zero-order extrapolation (outflow) on all four sides; t_end = 0.25.

@@ -5,6 +5,7 @@ import functools
 import operator
 
 import jax
+import jax.numpy as jnp
 
 
 def materialise(compute, operand, taken=None):
@@ -24,7 +25,7 @@ def materialise(compute, operand, taken=None):
         return jax.lax.cond(leaf.ravel()[0] == leaf.ravel()[0], compute, compute, operand)
 
     def zeros(a):
-        return jax.tree_util.tree_map(lambda z: jax.numpy.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
+        return jax.tree_util.tree_map(lambda z: jnp.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
 
     return jax.lax.cond(taken, compute, zeros, operand)
 

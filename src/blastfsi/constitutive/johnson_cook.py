@@ -85,14 +85,14 @@ def plastic_increment(q_trial, eps_p, dt, temperature, p: JohnsonCookParams):
     """Root d eps_p >= 0 of q* - 3G d eps_p - sigma_y(eps_p + d eps_p, d eps_p/dt, T) = 0 (0 if elastic)."""
     thermal = 1.0 - homologous_temperature(temperature, p) ** p.m
     three_g = 3.0 * p.shear_modulus
-    dt = jnp.maximum(dt, jnp.finfo(q_trial.dtype).tiny)
+    tiny = jnp.finfo(q_trial.dtype).tiny
+    dt = jnp.maximum(dt, tiny)
     log_kink = jnp.log(dt * p.reference_strain_rate)  # ln d eps_p where eps_dot* = 1
     y0 = flow_stress(eps_p, 0.0, temperature, p)
     plastic = q_trial > y0
     hi = jnp.where(plastic, (q_trial - y0) / three_g, 1.0)  # perfectly plastic bound: the root is below it
     lo = jnp.zeros_like(hi)
     tol = 8.0 * jnp.finfo(q_trial.dtype).eps
-    tiny = jnp.finfo(q_trial.dtype).tiny
 
     def cond(c):
         return jnp.logical_and(c[-1] < MAX_ITERATIONS, ~jnp.all(c[-2]))

@@ -40,9 +40,9 @@ import jax.numpy as jnp
 from blastfsi.euler import geometry
 from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import pad, shift
-from blastfsi.xla import materialise
 from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
+from blastfsi.xla import materialise
 
 NG = 2
 
