@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # The GPU figures of the open issues in one prepared call (issue 7 item 6: MPM 3D Johnson-Cook throughput;
 # issue 5 item 7: Eulerian 3D throughput at 256^3; issue 8 items 3 and 5: he-slab-2d against he-slab-2d-mpm
-# and he-slab-3d wall times), each stage under its own time limit so one slow stage cannot take the others.
+# and he-slab-3d wall times; benchmarks/gpu_profile.py: kernel time against wall time), each stage under
+# its own time limit so one slow stage cannot take the others.
 #
-#   bash benchmarks/gpu_figures.sh STAGES...     stages: env mpm euler slab2d slab3d tests (default: all)
+#   bash benchmarks/gpu_figures.sh STAGES...   stages: env mpm mpm-sort euler slab2d slab3d profile tests
+#                                                (default: all but mpm-sort and profile)
 #
 # Logs and JSON rows go to $OUT (default /tmp/gpu_figures): log.txt, results_mpm_gpu.json,
-# results_euler_gpu.json, <run>_summary.json. SMALL=1 shrinks every problem for a dry run on a CPU.
+# results_euler_gpu.json, <run>_summary.json, profile_gpu.json. SMALL=1 shrinks every problem for a dry run on a CPU.
 # Python packages the GPU machine lacks travel as wheels in .whl/ (pydantic, tomli-w, ...): installed to
 # /tmp/site when that folder exists.
 set -u
@@ -24,9 +26,9 @@ export PYTHONPATH=$ROOT/src:$ROOT/benchmarks:${PYTHONPATH:-}
 export PYTHONUNBUFFERED=1
 PY=${PY:-python3}
 if [ "${SMALL:-0}" = 1 ]; then
-  MPM_CELLS="8"; EULER_SIZES="16"; MIN_TIME=0.2; SLAB_END=3e-6; SLAB3D_END=1e-6
+  MPM_CELLS="8"; MPM_PROFILE_CELLS=8; EULER_SIZES="16"; MIN_TIME=0.2; SLAB_END=3e-6; SLAB3D_END=1e-6
 else
-  MPM_CELLS="80"; EULER_SIZES="256"; MIN_TIME=2; SLAB_END=""; SLAB3D_END=""
+  MPM_CELLS="80"; MPM_PROFILE_CELLS=80; EULER_SIZES="256"; MIN_TIME=2; SLAB_END=""; SLAB3D_END=""
 fi
 
 stage() {  # stage NAME LIMIT_S COMMAND...: output to the log, a line with its exit status and wall time
@@ -90,6 +92,11 @@ $PY -c 'import jax, jaxlib, numpy; print(jax.__version__, jaxlib.__version__, nu
            --min-time $MIN_TIME --gpu-bandwidth 4.8e12 --out "$OUT/results_euler_gpu.json" ;;
     slab2d) stage slab2d 400 bash -c "slab_runs cfdmp-32.5us mpm-32.5us" ;;
     slab3d) stage slab3d 300 bash -c slab3d_run ;;
+    profile) for task in "mpm $MPM_PROFILE_CELLS" "slab cfdmp-32.5us 1.2e-5" "slab mpm-32.5us 1.2e-5"; do
+               stage "profile-$task" 200 env PROFILE_OUT="$OUT/profile_gpu.json" $PY benchmarks/gpu_profile.py $task
+             done
+             stage "profile-mpm-float32" 200 env BLASTFSI_X64=0 PROFILE_OUT="$OUT/profile_gpu.json" \
+               $PY benchmarks/gpu_profile.py mpm $MPM_PROFILE_CELLS ;;
     tests) stage tests 240 env XLA_PYTHON_CLIENT_PREALLOCATE=false $PY -m pytest -q -x -n 8 -p no:cacheprovider \
            tests/test_mpm.py tests/test_euler_kernels.py tests/test_cfdmp.py ;;
     *) echo "unknown stage $s" | tee -a "$LOG" ;;

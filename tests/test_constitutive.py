@@ -475,3 +475,22 @@ def test_jc_radial_return_converges_in_few_iterations(monkeypatch):
     assert np.all(x > 0.0)
     flow = np.asarray(johnson_cook.flow_stress(eps_p + x, x / dt, temp, JC))
     np.testing.assert_allclose(q_trial - 3.0 * JC.shear_modulus * x, flow, rtol=1e-13)
+
+
+def test_jc_radial_return_unrolled_on_accelerators_gives_the_loop_result(monkeypatch):
+    """On a GPU the first UNROLLED_ITERATIONS Newton steps run unrolled before the loop (no host round trip
+    per iteration); a converged particle keeps its root, so the increments equal the loop's to round-off.
+    The roots span 1e-16..1e-3 (some need more than the unrolled steps: the loop finishes them)."""
+    from blastfsi import xla
+
+    excess = np.array([1e-12, 1e-9, 1e-6, 1e-3, 1e-1, 1.0])
+    eps_p = np.repeat([0.0, 1e-4, 0.05], excess.size)
+    dt, temp = 1e-7, np.full(eps_p.size, JC_MAT.room_temperature)
+    q_trial = np.asarray(johnson_cook.flow_stress(eps_p, 0.0, temp, JC)) * (1.0 + np.tile(excess, 3))
+    q_trial[0] *= 0.5  # one elastic particle
+    solve = jax.jit(lambda q: johnson_cook.plastic_increment(q, eps_p, dt, temp, JC))
+    loop = np.asarray(solve(q_trial))
+    monkeypatch.setattr(xla, "device_control_flow", lambda: False)
+    unrolled = np.asarray(jax.jit(lambda q: johnson_cook.plastic_increment(q, eps_p, dt, temp, JC))(q_trial))
+    assert loop[0] == unrolled[0] == 0.0 and np.all(loop[1:] > 0.0)
+    np.testing.assert_allclose(unrolled, loop, rtol=1e-13, atol=0.0)

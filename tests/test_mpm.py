@@ -512,3 +512,23 @@ def test_added_particles_skip_the_reserved_slots():
     assert int(required) == 12 + 4 + 6  # active + reserved free + batch
     _, required, slots = mpm.add_particles_at(pool, mpm.concatenate(batch, batch), 8)
     assert int(required) == 28 and np.all(np.asarray(slots) == 24)  # does not fit: nothing added
+
+
+def test_accelerator_control_flow_gives_the_same_step(monkeypatch):
+    """Where a conditional costs a host round trip (a GPU), the step computes the materialised values
+    unconditionally and selects (blastfsi.xla.materialise); forced here on the CPU: the same particles
+    after 10 steps, to round-off (the same arithmetic, fused differently)."""
+    from blastfsi import xla
+
+    state, prm, cfg = setup(GRID2, (0.2, 0.2), (0.6, 0.5), v=lambda x: 0.5 * (x - 0.4))
+
+    def run():  # a fresh jitted loop: the form is chosen when it is traced
+        return jax.jit(lambda s: jax.lax.fori_loop(0, 10, lambda i, s: mpm.step(s, 0.005, prm, cfg), s))(state)
+
+    cpu = run().particles
+    monkeypatch.setattr(xla, "device_control_flow", lambda: False)
+    accelerator = run().particles
+    assert float(jnp.max(jnp.abs(cpu.point.stress))) > 0.0
+    for x, y in zip(jax.tree_util.tree_leaves(cpu), jax.tree_util.tree_leaves(accelerator)):
+        x, y = np.asarray(x), np.asarray(y)
+        assert np.allclose(x, y, rtol=1e-12, atol=1e-12 * float(np.max(np.abs(x), initial=0.0)))

@@ -1,4 +1,12 @@
-"""Helpers that steer XLA's fusion (shared by the Eulerian and MPM kernels)."""
+"""Helpers that steer XLA's fusion and control flow (shared by the Eulerian and MPM kernels).
+
+On the CPU backend a conditional or a loop costs nothing but the boundary it puts
+between fusions, which these helpers use. On a GPU each conditional's predicate and
+each loop iteration's test is copied to the host before the next kernel is launched
+(a round trip that leaves the device idle): there the helpers select between
+computed branches and unroll short loops instead (measured on an H200, he-slab-2d:
+see docs/cfdmp.md, "GPU").
+"""
 from __future__ import annotations
 
 import functools
@@ -6,6 +14,11 @@ import operator
 
 import jax
 import jax.numpy as jnp
+
+
+def device_control_flow() -> bool:
+    """True where conditionals and loops run without a host round trip (the CPU backend)."""
+    return jax.default_backend() == "cpu"
 
 
 def materialise(compute, operand, taken=None):
@@ -18,16 +31,30 @@ def materialise(compute, operand, taken=None):
     barriers. A conditional is a boundary fusion cannot cross. ``taken``: None (both branches
     are ``compute``, so the predicate -- a value of the operand XLA cannot fold -- does not
     change the result), or a traced boolean under which ``compute`` runs, zeros of the same
-    shapes otherwise (e.g. an empty particle pool).
+    shapes otherwise (e.g. an empty particle pool, an ideal-gas phase's JWL terms).
+    Elsewhere (see :func:`device_control_flow`) ``compute`` runs unconditionally and its
+    result is selected.
     """
-    if taken is None:
-        leaf = jax.tree_util.tree_leaves(operand)[0]
-        return jax.lax.cond(leaf.ravel()[0] == leaf.ravel()[0], compute, compute, operand)
-
     def zeros(a):
         return jax.tree_util.tree_map(lambda z: jnp.zeros(z.shape, z.dtype), jax.eval_shape(compute, a))
 
+    if not device_control_flow():
+        value = compute(operand)
+        return value if taken is None else jax.tree_util.tree_map(lambda v: jnp.where(taken, v, 0), value)
+    if taken is None:
+        leaf = jax.tree_util.tree_leaves(operand)[0]
+        return jax.lax.cond(leaf.ravel()[0] == leaf.ravel()[0], compute, compute, operand)
     return jax.lax.cond(taken, compute, zeros, operand)
+
+
+def fori(n: int, body, init):
+    """``lax.fori_loop(0, n, body, init)`` (the body compiled once) where loops are free; elsewhere
+    the n bodies unrolled, each called with its Python int index."""
+    if device_control_flow():
+        return jax.lax.fori_loop(0, n, body, init)
+    for i in range(n):
+        init = body(i, init)
+    return init
 
 
 def row_sum(a):

@@ -34,7 +34,6 @@ from __future__ import annotations
 import functools
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
@@ -42,7 +41,7 @@ from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import pad, shift
 from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure
-from blastfsi.xla import materialise
+from blastfsi.xla import fori, materialise
 
 NG = 2
 
@@ -213,7 +212,7 @@ def _sweep(ins, outs, nw, eos_r, cfg: Config, lay, axis, record):
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     """SSP-RK2 (Shu & Osher 1988): U1 = U + dt L(U), U^{n+1} = U/2 + (U1 + dt L(U1))/2.
 
-    Both stages run in one fori_loop body (compiled once). moved: None, or per
+    Both stages run in one loop body (:func:`blastfsi.xla.fori`: compiled once on the CPU). moved: None, or per
     axis a tuple of face-transfer rows (faces 0..n of that axis) onto which the
     step's transfers (module docstring) are added; then (U_new, moved) is
     returned. Static: the plain step carries no transfers. Recording reads the
@@ -240,6 +239,6 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
         return (new, tuple(map(functools.partial(advance_axis, i), moved0, acc, fluxes))) if record else new
 
     if not record:
-        return jnp.stack(jax.lax.fori_loop(0, 2, stage, rows0))
-    rows, moved = jax.lax.fori_loop(0, 2, stage, (rows0, moved0))
+        return jnp.stack(fori(2, stage, rows0))
+    rows, moved = fori(2, stage, (rows0, moved0))
     return jnp.stack(rows), moved

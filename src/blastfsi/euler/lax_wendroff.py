@@ -54,6 +54,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from blastfsi import xla
 from blastfsi.euler import geometry
 from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import extend, extend_coefficient, shift
@@ -146,7 +147,8 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     """000 Eq. (6): L_z L_y L_x L_x L_y L_z, each operator with dt/2 (ERRATA 000-4).
 
     The six operators run in a fori_loop that switches between the ndim
-    directional bodies, so each body is compiled once. moved: None, or per
+    directional bodies, so each body is compiled once (on the CPU; unrolled
+    where loops cost a host round trip, :func:`blastfsi.xla.device_control_flow`). moved: None, or per
     axis a tuple of face-transfer rows (faces 0..n of that axis) onto which
     the transfers of the operators along that axis are summed; then
     (U_new, moved) is returned. Static: the plain step carries no transfers.
@@ -155,7 +157,7 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     see blastfsi.euler.step.step_with_transfers).
     """
     ndim = len(cfg.shape)
-    order = jnp.asarray(tuple(reversed(range(ndim))) + tuple(range(ndim)))
+    order = tuple(reversed(range(ndim))) + tuple(range(ndim))
     rows = tuple(U)
     c = jnp.sqrt(jnp.maximum(cell_state(rows, eos_r, lay).c2, 0.0))
 
@@ -179,6 +181,11 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
         return recording
 
     branches = [body(a) for a in range(ndim)]
-    state = jax.lax.fori_loop(0, 2 * ndim, lambda i, state: jax.lax.switch(order[i], branches, state),
-                              rows if moved is None else (rows, tuple(moved)))
+    state = rows if moved is None else (rows, tuple(moved))
+    if xla.device_control_flow():
+        state = jax.lax.fori_loop(0, 2 * ndim, lambda i, s: jax.lax.switch(jnp.asarray(order)[i], branches, s),
+                                  state)
+    else:
+        for a in order:
+            state = branches[a](state)
     return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])

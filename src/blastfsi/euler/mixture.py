@@ -34,10 +34,10 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 
 from blastfsi.eos.jwl import JWLParams, reference_pressure, reference_pressure_derivative
+from blastfsi.xla import materialise
 
 ALPHA_EPS = 1e-8  # |alpha_k| below this is replaced in the division rho_k = (alpha_k rho_k)/alpha_k
 RHO_FLOOR_REL = 1e-12  # rho_k >= 1e-12 rho0_k inside f_k: keeps rho0/rho_k finite (f_k ~ 0 there)
@@ -73,16 +73,20 @@ def phase_densities(partials, alphas):
     return out
 
 
+def _has_cold_terms(row: JWLParams):
+    """False for an ideal-gas phase (A = B = 0): its JWL terms are zeros."""
+    return (row.A != 0.0) | (row.B != 0.0)
+
+
 def cold_terms(rho_k, row: JWLParams):
     """(f_k, f_k') of one phase, rho_k floored at RHO_FLOOR_REL rho0_k; zeros for an ideal gas (A = B = 0).
 
-    The conditional skips the exponentials of an ideal-gas phase; it also
-    stores f and f' once for all their consumers (XLA does not fuse across it).
+    On the CPU a conditional skips the exponentials of an ideal-gas phase; it also
+    stores f and f' once for all their consumers (:func:`blastfsi.xla.materialise`).
     """
     rr = jnp.maximum(rho_k, RHO_FLOOR_REL * row.rho0)
-    return jax.lax.cond((row.A == 0.0) & (row.B == 0.0),
-                        lambda r: (jnp.zeros_like(r), jnp.zeros_like(r)),
-                        lambda r: (reference_pressure(r, row), reference_pressure_derivative(r, row)), rr)
+    return materialise(lambda r: (reference_pressure(r, row), reference_pressure_derivative(r, row)), rr,
+                       _has_cold_terms(row))
 
 
 def phase_sums(rho_k, partials, alphas, rows) -> Phases:
@@ -148,7 +152,8 @@ def cell_state(rows, eos_r, lay) -> CellState:
 def cold_pressure(rho_k, row: JWLParams):
     """f_k of one phase as in :func:`cold_terms` (without f_k'); zeros for an ideal gas."""
     rr = jnp.maximum(rho_k, RHO_FLOOR_REL * row.rho0)
-    return jax.lax.cond((row.A == 0.0) & (row.B == 0.0), jnp.zeros_like, lambda r: reference_pressure(r, row), rr)
+    return materialise(lambda r: reference_pressure(r, row), rr, _has_cold_terms(row))
+
 
 
 def pressure_velocity(rows, eos_r, lay, axis):
