@@ -90,8 +90,8 @@ _conservative = jax.jit(ek.conservative, static_argnums=5)  # compiled once: par
 @functools.partial(jax.jit, static_argnums=2)
 def _viewed_primitives(st: State, prm: Params, cs: cp.Static):
     """(primitives of the viewed grid, cells without gas, positive-phase duration) for a snapshot: one
-    compiled function, not some hundred operations each compiled on first use (83 compilations in the
-    snapshots of a short he-slab-2d-mpm run; on a GPU each takes ~0.1 s)."""
+    compiled function, not some hundred operations each compiled on first use (83 compilations, 5.6 s, in
+    the two snapshots of a short he-slab-2d-mpm run on the 2-core CPU; a GPU compiles slower still)."""
     rows, gas_mass = cp.gas_rows(st.mpm.particles, cs)
     U = jnp.where(st.coupled, cp.view(st.U, rows, gas_mass, prm.layout), st.U)
     return (ek.primitives(U, prm.euler, cs.euler), st.coupled & prm.layout.fictitious & ~(gas_mass > 0.0),
@@ -236,7 +236,7 @@ class Cfdmp:
         cfg = ek.Config(e.grid.shape, float(e.grid.dx), GEOMETRY_CODE[e.grid.geometry], e.bc, 1, len(e.materials),
                         tuple(e.grid.lower))
         return _conservative(jnp.asarray(e.rho_k, dtype), jnp.asarray(e.alpha[0], dtype),
-                               jnp.asarray(e.velocity, dtype), jnp.asarray(e.pressure, dtype), kp, cfg)
+                             jnp.asarray(e.velocity, dtype), jnp.asarray(e.pressure, dtype), kp, cfg)
 
     def initial_state(self, setup: problem.Setup, sc: CfdmpScenario, n_samples: int, dtype) -> State:
         static = self.static(setup, sc)

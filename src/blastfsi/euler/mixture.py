@@ -155,7 +155,6 @@ def cold_pressure(rho_k, row: JWLParams):
     return materialise(lambda r: reference_pressure(r, row), rr, _has_cold_terms(row))
 
 
-
 def pressure_velocity(rows, eos_r, lay, axis):
     """(p, u_axis) of conservative rows: the part of :func:`cell_state` a flux needs (no c^2)."""
     _, _, vel, rho_e, alphas, rho_k = _kinematics(rows, lay)
