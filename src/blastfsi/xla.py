@@ -4,9 +4,9 @@ On the CPU backend a conditional or a loop costs nothing but the boundary it put
 between fusions, which these helpers use. On a GPU each conditional's predicate and
 each loop iteration's test is copied to the host before the next kernel is launched
 (a round trip that leaves the device idle): there the helpers select between
-computed branches and unroll short loops instead. (On an H200 the he-slab-2d coupled
-step held ~60 such conditionals and its run averaged 14.4 ms a step; with these forms
-the step took 1.4 ms, the device's kernels busy 1.17 ms of it: docs/cfdmp.md, "GPU".)
+computed branches and unroll short loops instead. (The he-slab-2d coupled step held ~60
+such conditionals; with these forms it took 1.4 ms on an H200, the device's kernels busy
+1.17 ms of it: docs/cfdmp.md, "GPU".)
 """
 from __future__ import annotations
 
