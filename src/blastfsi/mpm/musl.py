@@ -266,8 +266,10 @@ def wave_speed(ps: PointState, material, params: Params, config: Config, pool: b
     return _per_model(speed, material, jnp.zeros_like(ps.density), config, pool)
 
 
+@functools.partial(jax.jit, static_argnames="config")
 def initialize(particles: Particles, params: Params, config: Config) -> State:
-    """Initial :class:`State`: the signal speeds of the active particles filled in."""
+    """Initial :class:`State`: the signal speeds of the active particles filled in (compiled: each model's
+    wave speed run eagerly made ~60 compilations of single operations in a he-slab-2d-mpm run)."""
     c = wave_speed(particles.point, particles.material, params, config)
     p = particles._replace(wave_speed=jnp.where(particles.active, c, particles.wave_speed))
     return State(particles=p, external_work=jnp.zeros((), p.mass.dtype),
