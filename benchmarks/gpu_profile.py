@@ -75,7 +75,7 @@ def mpm_task(cells: int, steps: int) -> dict:
     import jax
     from bench_mpm import setup
 
-    jax_, jnp, np, mpm, cfg, prm, st, n = setup(cells, None)
+    _, _, _, mpm, cfg, prm, st, n = setup(cells, None)
     dt = 0.5 * mpm.stable_dt(st, prm, cfg)
     loop = jax.jit(lambda s: jax.lax.fori_loop(0, steps, lambda i, s: mpm.step(s, dt, prm, cfg), s))
     out = measure(lambda: loop(st), steps, f"mpm {cells}^3 x8, {n} particles")

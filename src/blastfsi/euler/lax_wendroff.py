@@ -54,7 +54,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from blastfsi import xla
+from blastfsi.xla import fori
 from blastfsi.euler import geometry
 from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import extend, extend_coefficient, shift
@@ -148,7 +148,7 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
 
     The six operators run in a fori_loop that switches between the ndim
     directional bodies, so each body is compiled once (on the CPU; unrolled
-    where loops cost a host round trip, :func:`blastfsi.xla.device_control_flow`). moved: None, or per
+    where loops cost a host round trip, :func:`blastfsi.xla.fori`). moved: None, or per
     axis a tuple of face-transfer rows (faces 0..n of that axis) onto which
     the transfers of the operators along that axis are summed; then
     (U_new, moved) is returned. Static: the plain step carries no transfers.
@@ -181,11 +181,11 @@ def step(U, dt, eos_r, cfg: Config, lay, moved=None):
         return recording
 
     branches = [body(a) for a in range(ndim)]
-    state = rows if moved is None else (rows, tuple(moved))
-    if xla.device_control_flow():
-        state = jax.lax.fori_loop(0, 2 * ndim, lambda i, s: jax.lax.switch(jnp.asarray(order)[i], branches, s),
-                                  state)
-    else:
-        for a in order:
-            state = branches[a](state)
+
+    def operator(i, state):  # i traced in a loop, a Python int where the loop is unrolled (fori)
+        if isinstance(i, int):
+            return branches[order[i]](state)
+        return jax.lax.switch(jnp.asarray(order)[i], branches, state)
+
+    state = fori(2 * ndim, operator, rows if moved is None else (rows, tuple(moved)))
     return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])
