@@ -4,11 +4,11 @@
 # and he-slab-3d wall times; benchmarks/gpu_profile.py: kernel time against wall time), each stage under
 # its own time limit so one slow stage cannot take the others.
 #
-#   bash benchmarks/gpu_figures.sh STAGES...   stages: env mpm mpm-sort euler slab2d slab3d profile tests
-#                                                (default: all but mpm-sort and profile)
+#   bash benchmarks/gpu_figures.sh STAGES...   stages: env mpm mpm-sort euler slab2d slab3d profile runprof tests
+#                                                (default: all but mpm-sort, profile and runprof)
 #
 # Logs and JSON rows go to $OUT (default /tmp/gpu_figures): log.txt, results_mpm_gpu.json,
-# results_euler_gpu.json, <run>_summary.json, profile_gpu.json. SMALL=1 shrinks every problem for a dry run on a CPU.
+# results_euler_gpu.json, <run>_summary.json, profile_gpu.json, profile_run_gpu.json. SMALL=1 shrinks every problem for a dry run on a CPU.
 # Python packages the GPU machine lacks travel as wheels in .whl/ (pydantic, tomli-w, ...): installed to
 # /tmp/site when that folder exists.
 set -u
@@ -97,6 +97,10 @@ $PY -c 'import jax, jaxlib, numpy; print(jax.__version__, jaxlib.__version__, nu
              done
              stage "profile-mpm-float32" 200 env BLASTFSI_X64=0 PROFILE_OUT="$OUT/profile_gpu.json" \
                $PY benchmarks/gpu_profile.py mpm $MPM_PROFILE_CELLS ;;
+    runprof) for name in cfdmp-32.5us mpm-32.5us; do
+               stage "runprof-$name" 300 env PROFILE_OUT="$OUT/profile_run_gpu.json" $PY benchmarks/profile_run.py $name \
+                 ${SLAB_END}
+             done ;;
     tests) stage tests 240 env XLA_PYTHON_CLIENT_PREALLOCATE=false $PY -m pytest -q -x -n 8 -p no:cacheprovider \
            tests/test_mpm.py tests/test_euler_kernels.py tests/test_cfdmp.py ;;
     *) echo "unknown stage $s" | tee -a "$LOG" ;;
