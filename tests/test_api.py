@@ -11,7 +11,8 @@ from blastfsi.exact import shock
 from blastfsi.scenario import ScenarioError
 from conftest import P0, RHO0, uniform_data
 
-COMMON_KEYS = {"method", "time", "steps", "cells", "wall_time", "compile_time"}
+COMMON_KEYS = {"method", "time", "steps", "cells", "wall_time", "compile_time", "loop_time", "output_time"}
+TIMES = {"wall_time", "compile_time", "loop_time", "output_time"}
 # every single-member run here has 200 zones, 201 history samples and 2 gauges: compiled once
 SMALL = {"grid.cells": 200, "domain.length": 1.0, "time.end": 0.0016, "output.plots": False,
          "output.history_samples": 201, "output.gauges": [0.25, 0.75]}
@@ -51,7 +52,7 @@ def test_example_name_with_overrides_matches_the_cli_json(capsys, tmp_path):
     printed = json.loads(capsys.readouterr().out)
     assert code == 0 and printed.keys() == res.summary.keys()
     assert printed["compile_time"] == 0.0  # the same engine: the executable compiled for the API run is reused
-    for key in printed.keys() - {"wall_time", "compile_time"}:
+    for key in printed.keys() - TIMES:
         assert printed[key] == res.summary[key], key
 
 
@@ -62,6 +63,9 @@ def test_path_input_writes_results_and_reads_snapshots_back(tmp_path):
     res = blastfsi.run(str(path), out=out)
     end = res.summary["time"]
     assert json.loads((out / "summary.json").read_text()) == res.summary
+    summ = res.summary  # 3 snapshots written inside the time loop: their time is its output part
+    assert summ["output_time"] > 0.0 and summ["loop_time"] > 0.0
+    assert summ["loop_time"] + summ["output_time"] <= summ["wall_time"]
     final = res.fields(time=end)
     for name, values in res.fields().items():
         np.testing.assert_array_equal(final[name], values)
@@ -72,6 +76,7 @@ def test_path_input_writes_results_and_reads_snapshots_back(tmp_path):
         res.fields(time=1e-3)
     again = blastfsi.run(path, set={"output.fields": 0})  # a Path; out=None: nothing written
     assert again.out_dir is None and again.fields(time=end)["pressure"].shape == (200,)
+    assert again.summary["output_time"] == 0.0
     with pytest.raises(ValueError, match="out=None"):
         again.fields(time=1e-3)
 

@@ -9,7 +9,11 @@ checkpoints (any NamedTuple state, saved and restored leaf by leaf under its
 field names: restart is bit for bit) and the end. Between chunks it updates
 the progress bar and turns a fault flag into an error naming the time, step,
 location and last checkpoint. At the end it writes histories, the summary and
-plots into the results directory.
+plots into the results directory. The summary times the run: ``compile_time``
+(the time loop's compilation, a grown pool's included), ``wall_time`` (the rest
+of the time loop: ``loop_time``, the compiled loop's calls, plus
+``output_time``, the snapshots and checkpoints written between them, with the
+first-use compilation of their functions, plus the progress bar and checks).
 """
 from __future__ import annotations
 
@@ -259,13 +263,27 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
 
     bar = _Progress(sc.time.end, enabled=progress)
     started, grow_compile = wallclock.perf_counter(), 0.0
+    spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots and checkpoints
+
+    def timed(part, fn, *args):
+        t0 = wallclock.perf_counter()
+        value = fn(*args)
+        spent[part] += wallclock.perf_counter() - t0
+        return value
+
+    def advanced(state, t_stop):  # the time loop's call, waited for
+        return jax.block_until_ready(advance(state, params, t_stop, *scalars))
+
+    def snapshot(index, t, state):
+        results.write_snapshot(out, index, t, [method.snapshot(s, u) for s, u in zip(_members(state), setups)])
+        snapshots.append((index, t))
+
     try:
         if out is not None and not restart and field_times and field_times[0] == 0.0:
-            results.write_snapshot(out, 0, 0.0, [method.snapshot(s, u) for s, u in zip(_members(state), setups)])
-            snapshots.append((0, 0.0))
+            timed("output", snapshot, 0, 0.0, state)
         for t_stop in (t for t in stops if t > t_start):
             while np.any(np.asarray(state.t) < t_stop):
-                state = advance(state, params, t_stop, *scalars)
+                state = timed("loop", advanced, state, t_stop)
                 grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
                 if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
                     setups, state = grown
@@ -283,14 +301,11 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
             if out is None:
                 continue
             if t_stop in field_times:
-                index = field_times.index(t_stop)
-                results.write_snapshot(out, index, t_stop,
-                                       [method.snapshot(s, u) for s, u in zip(_members(state), setups)])
-                snapshots.append((index, t_stop))
+                timed("output", snapshot, field_times.index(t_stop), t_stop, state)
             if t_stop in ckpt_times:
                 leaves = {n: np.asarray(leaf) for n, leaf in _leaf_names(state)}
-                last_ckpt = results.write_checkpoint(out, ckpt_times.index(t_stop) + 1, leaves,
-                                                     {"time": t_stop, "method": sc.method})
+                last_ckpt = timed("output", results.write_checkpoint, out, ckpt_times.index(t_stop) + 1, leaves,
+                                  {"time": t_stop, "method": sc.method})
     finally:
         bar.close()
     wall = wallclock.perf_counter() - started - grow_compile  # (the time loop only)
@@ -298,7 +313,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     finals = _members(state)
     columns, histories = _histories(method, setups, sc, state)
     summaries = [{"method": sc.method, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
-                  "wall_time": wall, "compile_time": compile_time, **method.summary(msc, setup, hist, s)}
+                  "wall_time": wall, "compile_time": compile_time,
+                  "loop_time": spent["loop"], "output_time": spent["output"], **method.summary(msc, setup, hist, s)}
                  for s, setup, msc, hist in zip(finals, setups, member_scs, histories)]
     result = Result(sc, members, setups, summaries, histories, state, out, method, sorted(snapshots))
     if out is not None:
