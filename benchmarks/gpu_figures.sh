@@ -4,8 +4,8 @@
 # and he-slab-3d wall times; benchmarks/gpu_profile.py: kernel time against wall time), each stage under
 # its own time limit so one slow stage cannot take the others.
 #
-#   bash benchmarks/gpu_figures.sh STAGES...   stages: env mpm mpm-sort euler slab2d slab3d profile runprof tests
-#                                                (default: all but mpm-sort, profile and runprof)
+#   bash benchmarks/gpu_figures.sh STAGES...   stages: env mpm mpm-sort euler slab2d slab2d-cache slab3d profile runprof tests
+#                                                (default: all but mpm-sort, slab2d-cache, profile and runprof)
 #
 # Logs and JSON rows go to $OUT (default /tmp/gpu_figures): log.txt, results_mpm_gpu.json,
 # results_euler_gpu.json, <run>_summary.json, profile_gpu.json, profile_run_gpu.json. SMALL=1 shrinks every problem for a dry run on a CPU.
@@ -57,7 +57,8 @@ for name in names:
     res = blastfsi.run(example, set=overrides, out=folder)
     keep = {k: v for k, v in res.summary.items() if isinstance(v, (int, float, str, bool))}
     (out / f"{name}_summary.json").write_text(json.dumps(res.summary, indent=1, default=str))
-    print(name, json.dumps({k: keep.get(k) for k in ("steps", "wall_time", "compile_time", "particles")}), flush=True)
+    print(name, json.dumps({k: keep.get(k) for k in ("steps", "wall_time", "loop_time", "output_time", "compile_time",
+                                                      "particles")}), flush=True)
 EOF
 }
 
@@ -91,6 +92,10 @@ $PY -c 'import jax, jaxlib, numpy; print(jax.__version__, jaxlib.__version__, nu
     euler) stage euler 300 $PY benchmarks/bench_euler.py --sizes $EULER_SIZES --precision float64 float32 --repeats 3 \
            --min-time $MIN_TIME --gpu-bandwidth 4.8e12 --out "$OUT/results_euler_gpu.json" ;;
     slab2d) stage slab2d 400 bash -c "slab_runs cfdmp-32.5us mpm-32.5us" ;;
+    slab2d-cache) for round in 1 2; do  # the pair twice with JAX's persistent compilation cache: what it saves
+                    stage "slab2d-cache-$round" 300 env JAX_COMPILATION_CACHE_DIR=/tmp/xla_cache \
+                      bash -c "slab_runs cfdmp-32.5us mpm-32.5us"
+                  done ;;
     slab3d) stage slab3d 300 bash -c slab3d_run ;;
     profile) for task in "mpm $MPM_PROFILE_CELLS" "slab cfdmp-32.5us 1.2e-5" "slab mpm-32.5us 1.2e-5"; do
                stage "profile-$task" 200 env PROFILE_OUT="$OUT/profile_gpu.json" $PY benchmarks/gpu_profile.py $task
