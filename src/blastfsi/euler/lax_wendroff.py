@@ -54,12 +54,12 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from blastfsi.xla import fori
 from blastfsi.euler import geometry
 from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import extend, extend_coefficient, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.mixture import cell_state, pressure_velocity
+from blastfsi.xla import fori
 
 NG = 2  # ghost cells: theta (Eq. 4) of the cell next to a boundary face needs rho two cells out
 
