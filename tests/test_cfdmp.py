@@ -163,9 +163,10 @@ def test_strong_shock_leaves_the_mpm_region():
 
 @pytest.mark.slow  # default-suite time (< 10 min on 2 cores)
 def test_a_full_pool_grows_and_a_fixed_one_stops_the_run(shock):
-    """The default pool (structures + 1.25 x the box's gas particles) fills as the shock compresses the box's
-    gas and the bridge creates particles: the loop stops while the pool still has room for one step's
-    emissions, the driver enlarges it and the run goes on. No emission is refused, so the solution is the
+    """The default pool (structures + numerics.pool_headroom x the box's gas particles + one step's emissions)
+    fills as the shock compresses the box's gas and the bridge creates particles: the loop stops while the pool
+    still has room for one step's emissions, the driver enlarges it, compiles the loop once more
+    (summary ``pool_growths``) and the run goes on. No emission is refused, so the solution is the
     one of a run with room to spare, to round-off (the extra slots add exact zeros to every sum; only the
     order of the pool reductions changes), and the mass budget stays exact. With ``numerics.capacity`` set,
     the same pool stops the run when an emission does not fit, with the size needed."""
@@ -176,9 +177,10 @@ def test_a_full_pool_grows_and_a_fixed_one_stops_the_run(shock):
     coupled, _ = shock
     initial = methods.get("cfdmp").build(expand(api.load("cfdmp-shock-tube", set=FAST))[2][0]).capacity
     assert np.nanmax(coupled.history["particles"]) > initial and coupled.summary["capacity"] > initial
+    assert coupled.summary["pool_growths"] == 1
     assert_budget_closed(coupled.summary, 1e-13)
     roomy = blastfsi.run("cfdmp-shock-tube", set={**FAST, "numerics.capacity": 20 * initial})
-    assert roomy.summary["capacity"] == 20 * initial
+    assert roomy.summary["capacity"] == 20 * initial and roomy.summary["pool_growths"] == 0
     assert coupled.summary["steps"] == roomy.summary["steps"]
     f, g = coupled.fields(), roomy.fields()
     for name in ("density", "pressure", "velocity"):
@@ -201,6 +203,7 @@ def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     assert len(checkpoint) == 1
     saved, _ = results.read_checkpoint(checkpoint[0])
     assert saved["mpm.particles.active"].shape[1] == res.summary["capacity"]  # grown before 0.75 end
+    assert res.summary["pool_growths"] == 1
     copy = tmp_path / "b"
     shutil.copytree(tmp_path / "a", copy)
     again = blastfsi.restart(copy)
@@ -208,6 +211,7 @@ def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     for key in ("density", "pressure", "velocity"):
         np.testing.assert_array_equal(a[key], b[key])
     assert again.summary["steps"] == res.summary["steps"] and again.summary["capacity"] == res.summary["capacity"]
+    assert again.summary["pool_growths"] == 0  # rebuilt at the checkpoint's size before its one compilation
 
 
 def test_euler_cfl_sets_the_eulerian_courant_number_only():
@@ -238,6 +242,7 @@ def test_bad_input_is_named():
     fails("too narrow", mpm_region={"lower": [0.5], "upper": [0.53], "bridge_cells": 5})
     fails("cell face", mpm_region={"lower": [0.5013], "upper": [0.75]})
     fails("numerics.capacity", numerics={"capacity": 10})
+    fails("numerics.pool_headroom", numerics={"pool_headroom": 0.5})
     slab = {"lower": [0.505], "upper": [0.6], "material": "concrete-48mpa"}
     fails("crosses the bridge", structures=[slab])
     fails("whole domain", mpm_region={"lower": [0.0], "upper": [1.0], "activation_overpressure": 1e4})
@@ -300,6 +305,7 @@ def test_he_slab_3d_runs_and_closes_its_mass_budget():
     res = blastfsi.run("he-slab-3d", set={"output.fields": 0, "output.plots": False})
     s = res.summary
     assert s["coupled_faces"] == ["lower x"] and s["time"] == pytest.approx(2.0e-5)
+    assert s["pool_growths"] == 0  # the default pool holds the bridge's particles: one compilation (DESIGN.md)
     assert_budget_closed(s, 1e-13)
     g1, g2 = s["gauges"]
     assert g1["region"] == "euler" and g2["region"] == "particles"

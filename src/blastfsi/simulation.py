@@ -13,7 +13,9 @@ plots into the results directory. The summary times the run: ``compile_time``
 (the time loop's compilation, a grown pool's included), ``wall_time`` (the rest
 of the time loop: ``loop_time``, the compiled loop's calls, plus
 ``output_time``, the snapshots and checkpoints written between them, with the
-first-use compilation of their functions, plus the progress bar and checks).
+first-use compilation of their functions, plus the progress bar and checks);
+a method with a growing particle pool adds ``pool_growths``, the times a full pool
+was enlarged and the time loop compiled again.
 """
 from __future__ import annotations
 
@@ -262,7 +264,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     advance, compile_time = compiled_advance(method, static, state, params, stops[-1], *scalars)
 
     bar = _Progress(sc.time.end, enabled=progress)
-    started, grow_compile = wallclock.perf_counter(), 0.0
+    started, grow_compile, growths = wallclock.perf_counter(), 0.0, 0
     spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots and checkpoints
 
     def timed(part, fn, *args):
@@ -291,6 +293,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                     advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
                     compile_time += more
                     grow_compile += more
+                    growths += 1
                     continue
                 faulted = out is not None and np.any(np.asarray(state.fault) != FAULT_NONE)
                 # a fault keeps the history up to it, as it keeps the snapshots and checkpoints
@@ -314,7 +317,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     columns, histories = _histories(method, setups, sc, state)
     summaries = [{"method": sc.method, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
                   "wall_time": wall, "compile_time": compile_time,
-                  "loop_time": spent["loop"], "output_time": spent["output"], **method.summary(msc, setup, hist, s)}
+                  "loop_time": spent["loop"], "output_time": spent["output"],
+                  **({"pool_growths": growths} if hasattr(method, "grow") else {}), **method.summary(msc, setup, hist, s)}
                  for s, setup, msc, hist in zip(finals, setups, member_scs, histories)]
     result = Result(sc, members, setups, summaries, histories, state, out, method, sorted(snapshots))
     if out is not None:

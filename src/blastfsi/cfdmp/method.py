@@ -75,11 +75,6 @@ class Static(NamedTuple):
     tracers: tuple  # structure particle of each output.tracers point
 
 
-def _pool_margin(setup: problem.Setup) -> int:
-    n_face_cells = sum(int(f.outside.size) for f in setup.faces)
-    return n_face_cells * len(setup.gas_material) if setup.info["capacity_grows"] else 0
-
-
 def _maps(s: State) -> blast_maps.BlastMaps:
     return blast_maps.BlastMaps(s.peak, s.arrival, s.end, s.impulse, s.last)
 
@@ -175,7 +170,7 @@ class Cfdmp:
                              tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
                              outflow_faces(setup))
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
-        return Static(coupling, flat, setup.capacity, _pool_margin(setup), tuple(setup.info["tracers"]))
+        return Static(coupling, flat, setup.capacity, setup.info["pool_margin"], tuple(setup.info["tracers"]))
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         e = setup.euler
@@ -444,7 +439,7 @@ class Cfdmp:
     @staticmethod
     def pool_needed(state: State, setup: problem.Setup) -> int:
         active = int(np.sum(np.asarray(state.mpm.particles.active)))
-        return max(int(state.budget.required), active + _pool_margin(setup))
+        return max(int(state.budget.required), active + setup.info["pool_margin"])
 
     @staticmethod
     def grow(setup: problem.Setup, state: State, capacity: int):

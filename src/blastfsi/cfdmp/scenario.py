@@ -66,9 +66,13 @@ class CfdmpNumerics(MPMNumerics):
         "PIC share alpha of the gas particles' G2P velocity (FLIP/PIC blend, its kinetic-energy loss heats the "
         "particle; 0: pure FLIP; structures stay FLIP)"))
     capacity: Optional[int] = Field(None, ge=1, le=500_000_000, description=(
-        "fixed particle pool size: the run stops when the bridge needs more (default: a pool of structures + "
-        "1.25 x the gas particles of the box that grows as the bridge fills it; with MPM everywhere, which "
-        "creates none, structures + the gas particles)"))
+        "fixed particle pool size: the run stops when the bridge needs more (default: a pool that grows, sized "
+        "by pool_headroom; with MPM everywhere, which creates none, structures + the gas particles)"))
+    pool_headroom: float = Field(1.5, ge=1.0, le=20.0, description=(
+        "default pool (numerics.capacity unset) with coupled faces: room for the structures, pool_headroom x "
+        "the box's gas particles and one step's emissions. The bridge fills the box as the blast compresses its "
+        "gas (he-slab-2d: 1.29 x at 22 us, he-slab-3d ~1.25 x); a full pool is enlarged and the time loop "
+        "compiled again (summary pool_growths), and every step costs in proportion to the pool"))
 
 
 class CfdmpOutput(EulerOutput, Tracers):

@@ -39,11 +39,6 @@ from blastfsi.problems import euler as euler_problem
 from blastfsi.problems import mpm as mpm_problem
 from blastfsi.scenario import ScenarioError
 
-POOL_HEADROOM = 1.25  # default initial pool with coupled faces: structures + 1.25 x the box's gas particles; when
-#                      the bridge fills it the driver enlarges it (blastfsi.simulation.GROWTH) and goes on. Every
-#                      step costs in proportion to the pool, not to the active particles (he-slab-2d to 32.5 us,
-#                      29 866 active at the end: loop 63.9 s with 67 000 slots, 42.1 s with 36 000)
-
 
 @dataclass(frozen=True)
 class Face:
@@ -280,8 +275,12 @@ def build(sc: CfdmpScenario) -> Setup:
     partial = esetup.alpha * esetup.rho_k  # (n, *shape)
     present = partial >= cp_kernels.PRESENT * np.sum(partial, axis=0)
     at_start = int(np.sum(present.reshape(len(partial), -1)[:, gcell]))
-    capacity = sc.numerics.capacity or n_struct + (max(at_start, int(np.ceil(POOL_HEADROOM * gvol.size)))
-                                                   if faces else at_start)
+    # a growing pool counts as full when fewer slots are free than one step can fill: one inflow particle per
+    # face cell and gas material (coupling.emit), so no emission is ever refused
+    grows = bool(faces) and sc.numerics.capacity is None
+    pool_margin = sum(int(f.outside.size) for f in faces) * len(gas_material) if grows else 0
+    capacity = sc.numerics.capacity or n_struct + (max(at_start, int(np.ceil(sc.numerics.pool_headroom * gvol.size)))
+                                                   + pool_margin if faces else at_start)
     if capacity < n_struct + at_start:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
                             f"of the MPM box ({at_start}) need {n_struct + at_start} particles; set "
@@ -350,7 +349,7 @@ def build(sc: CfdmpScenario) -> Setup:
                 bridge_cells=w, coupled_faces=[f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
                                                for f in faces],
                 structure_particles=n_struct, gas_particles=int(gvol.size), capacity=int(capacity),
-                capacity_grows=bool(faces) and sc.numerics.capacity is None,
+                capacity_grows=grows, pool_margin=pool_margin,
                 mpm_materials=list(names), activation_overpressure=box.activation_overpressure,
                 gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape, mpm_cfl=sc.numerics.cfl,
                 q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
