@@ -318,7 +318,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     summaries = [{"method": sc.method, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
                   "wall_time": wall, "compile_time": compile_time,
                   "loop_time": spent["loop"], "output_time": spent["output"],
-                  **({"pool_growths": growths} if hasattr(method, "grow") else {}), **method.summary(msc, setup, hist, s)}
+                  **({"pool_growths": growths} if hasattr(method, "grow") else {}),
+                  **method.summary(msc, setup, hist, s)}
                  for s, setup, msc, hist in zip(finals, setups, member_scs, histories)]
     result = Result(sc, members, setups, summaries, histories, state, out, method, sorted(snapshots))
     if out is not None:

@@ -71,8 +71,8 @@ class CfdmpNumerics(MPMNumerics):
     pool_headroom: float = Field(1.5, ge=1.0, le=20.0, description=(
         "default pool (numerics.capacity unset) with coupled faces: room for the structures, pool_headroom x "
         "the box's gas particles and one step's emissions. The bridge fills the box as the blast compresses its "
-        "gas (he-slab-2d: 1.29 x at 22 us, he-slab-3d: 1.21 x at its 20 us end); a full pool is enlarged and the time loop "
-        "compiled again (summary pool_growths), and every step costs in proportion to the pool"))
+        "gas (he-slab-2d: 1.29 x at 22 us, he-slab-3d: 1.21 x at its 20 us end); a full pool is enlarged and "
+        "the time loop compiled again (summary pool_growths), and every step costs in proportion to the pool"))
 
 
 class CfdmpOutput(EulerOutput, Tracers):

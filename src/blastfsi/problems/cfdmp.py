@@ -276,11 +276,11 @@ def build(sc: CfdmpScenario) -> Setup:
     present = partial >= cp_kernels.PRESENT * np.sum(partial, axis=0)
     at_start = int(np.sum(present.reshape(len(partial), -1)[:, gcell]))
     # a growing pool counts as full when fewer slots are free than one step can fill: one inflow particle per
-    # face cell and gas material (coupling.emit), so no emission is ever refused
+    # face cell and gas material (coupling.feed), so no emission is ever refused
     grows = bool(faces) and sc.numerics.capacity is None
     pool_margin = sum(int(f.outside.size) for f in faces) * len(gas_material) if grows else 0
-    capacity = sc.numerics.capacity or n_struct + (max(at_start, int(np.ceil(sc.numerics.pool_headroom * gvol.size)))
-                                                   + pool_margin if faces else at_start)
+    headroom = max(at_start, int(np.ceil(sc.numerics.pool_headroom * gvol.size))) + pool_margin
+    capacity = sc.numerics.capacity or n_struct + (headroom if faces else at_start)
     if capacity < n_struct + at_start:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
                             f"of the MPM box ({at_start}) need {n_struct + at_start} particles; set "
