@@ -289,6 +289,8 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                 grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
                 if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
                     setups, state = grown
+                    bar.note(f"t = {float(np.min(np.asarray(state.t))):.4e} s: particle pool full, grown to "
+                             f"{_pool_size(method, state)} slots (time loop compiled again)")
                     static = method.static(setups[0], member_scs[0])
                     advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
                     compile_time += more
@@ -398,6 +400,11 @@ class _Progress:
     def update(self, t: float, step: int, dt: float) -> None:
         if self._bar is not None:
             self._bar.update(self._task, completed=t, t=t, step=step, dt=dt)
+
+    def note(self, message: str) -> None:
+        """A line above the bar (on a terminal only, as the bar)."""
+        if self._bar is not None:
+            self._bar.console.print(message)
 
     def close(self) -> None:
         if self._bar is not None:
