@@ -563,10 +563,11 @@ class Cfdmp:
         from blastfsi.plotting.histories import gauge_histories, tracer_histories
 
         folder.mkdir(parents=True, exist_ok=True)
+        t0 = float(setups[0].euler.info.get("remap_time", 0.0))  # (a charge: the run starts at its remap)
         if sc.output.gauges:
-            gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+            gauge_histories(folder / "gauges.png", histories, sc.output.gauges, t0)
         if sc.output.tracers:
-            tracer_histories(folder / "tracers.png", histories, sc.output.tracers, AXES[:sc.domain.ndim])
+            tracer_histories(folder / "tracers.png", histories, sc.output.tracers, AXES[:sc.domain.ndim], t0)
         grid = finals[0].grid
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
                             grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s",

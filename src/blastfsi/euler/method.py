@@ -206,13 +206,14 @@ class Euler:
         from blastfsi.plotting.fields import plot_pressure_field
         from blastfsi.plotting.histories import gauge_histories
 
-        if sc.output.gauges:
-            gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+        if sc.output.gauges:  # (a charge: the run starts at its remap)
+            t0 = setups[0].info.get("remap_time", 0.0)
+            gauge_histories(folder / "gauges.png", histories, sc.output.gauges, t0)
             if sc.initial.kind == "charge" and setups[0].info["kb_burst"] is not None:
                 from blastfsi.plotting.kb import kb_gauge_histories
 
                 info = setups[0].info
-                hist = dict(histories[0], time=histories[0]["time"] + info["remap_time"])
+                hist = dict(histories[0], time=histories[0]["time"] + t0)
                 kb_gauge_histories(folder / "gauges_kb.png", hist, sc.output.gauges, info["charge_mass"],
                                    info["kb_burst"], centre=info["charge_center"])
         grid = finals[0]

@@ -33,28 +33,38 @@ def _position(p) -> str:
     return "(" + ", ".join(f"{c:g}" for c in coords) + ") m" if len(coords) > 1 else f"x = {coords[0]:g} m"
 
 
-def gauge_histories(file: Path, histories: list[dict], positions: list) -> None:
-    """Overpressure at each gauge (member 0 of an ensemble); positions are numbers (1D) or points."""
+def _time_label(detonation_offset: float) -> str:
+    return "time after detonation [ms]" if detonation_offset else "time [ms]"
+
+
+def gauge_histories(file: Path, histories: list[dict], positions: list, detonation_offset: float = 0.0) -> None:
+    """Overpressure at each gauge (member 0 of an ensemble); positions are numbers (1D) or points.
+    ``detonation_offset``: the run's t = 0 after the detonation (a charge remapped from 1D at that time),
+    added to the time axis so that it reads as the summary's arrival times do."""
     hist = histories[0]
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for k, x in enumerate(positions):
-        ax.plot(hist["time"] * 1e3, hist[f"gauge{k}_overpressure"] / 1e3, lw=1.2, label=_position(x))
-    ax.set_xlabel("time [ms]"), ax.set_ylabel("overpressure [kPa]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+        ax.plot((hist["time"] + detonation_offset) * 1e3, hist[f"gauge{k}_overpressure"] / 1e3, lw=1.2,
+                label=_position(x))
+    ax.set_xlabel(_time_label(detonation_offset)), ax.set_ylabel("overpressure [kPa]"), ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(file, dpi=120)
     plt.close(fig)
 
 
-def tracer_histories(file: Path, histories: list[dict], positions: list, axes) -> None:
+def tracer_histories(file: Path, histories: list[dict], positions: list, axes, detonation_offset: float = 0.0) -> None:
     """Displacement components of each tracer (member 0 of an ensemble) against time, in mm: a plate
-    centre's deflection history, its peak and its permanent set."""
+    centre's deflection history, its peak and its permanent set (``detonation_offset``: see
+    :func:`gauge_histories`)."""
     hist = histories[0]
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for k, x in enumerate(positions):
         for a in axes:
-            ax.plot(hist["time"] * 1e3, hist[f"tracer{k}_displacement_{a}"] * 1e3, lw=1.2,
+            ax.plot((hist["time"] + detonation_offset) * 1e3, hist[f"tracer{k}_displacement_{a}"] * 1e3, lw=1.2,
                     label=f"{_position(x)}, {a}")
-    ax.set_xlabel("time [ms]"), ax.set_ylabel("displacement [mm]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+    ax.set_xlabel(_time_label(detonation_offset)), ax.set_ylabel("displacement [mm]"), ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(file, dpi=120)
     plt.close(fig)
