@@ -162,7 +162,8 @@ class Method(Protocol):
 
     def summary(self, sc, setup: Setup, history: dict, state) -> dict:
         """The method's JSON-able summary quantities of one member (the driver adds
-        time, steps, cells, wall_time, compile_time, loop_time, output_time)."""
+        time, steps, cells, wall_time, compile_time, loop_time, output_time; pool_growths for a method
+        with the pool hooks below)."""
 
     def locate_fault(self, state, setup: Setup) -> str:
         """Where a faulted (or step-collapsed) member fails, e.g. 'zone 12 at x = 0.1 m'."""

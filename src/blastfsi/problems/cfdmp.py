@@ -279,8 +279,8 @@ def build(sc: CfdmpScenario) -> Setup:
     # face cell and gas material (coupling.feed), so no emission is ever refused
     grows = bool(faces) and sc.numerics.capacity is None
     pool_margin = sum(int(f.outside.size) for f in faces) * len(gas_material) if grows else 0
-    headroom = max(at_start, int(np.ceil(sc.numerics.pool_headroom * gvol.size))) + pool_margin
-    capacity = sc.numerics.capacity or n_struct + (headroom if faces else at_start)
+    gas_slots = max(at_start, int(np.ceil(sc.numerics.pool_headroom * gvol.size))) + pool_margin
+    capacity = sc.numerics.capacity or n_struct + (gas_slots if faces else at_start)
     if capacity < n_struct + at_start:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
                             f"of the MPM box ({at_start}) need {n_struct + at_start} particles; set "
