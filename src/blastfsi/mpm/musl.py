@@ -503,7 +503,9 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         p2 = p2 + source.momentum
     v2 = gather_columns(idx, _constrain(p2 * inv_m, p_fix, m_fix, grid, config.prescribed), combined)
     # Eqs. (27)-(28) from the velocity gradient L_ij = sum_I v_iI dN_I/dx_j
-    L = {(i, j): stencil_sum(v2[i] * grad[j]) for i in range(d) for j in range(d)}
+    pairs = [(i, j) for i in range(d) for j in range(d)]
+    rows = materialise(lambda a: jnp.stack([stencil_sum(a[0][i] * a[1][j]) for i, j in pairs]), (v2, grad))
+    L = {ij: rows[k] for k, ij in enumerate(pairs)}
     if grid.axisymmetric:
         L[2, 2] = stencil_sum(w_hoop * v2[0]) / r_hoop  # hoop rate v_r / r
     sym = {(i, j): 0.5 * dt * (L[i, j] + L[j, i]) for i, j in L}

@@ -17,6 +17,7 @@ so the partition of unity and sum_I grad N_I = 0 hold there too.
 from __future__ import annotations
 
 import functools
+import itertools
 import operator
 from typing import Callable, NamedTuple
 
@@ -104,23 +105,23 @@ def expand(per_dim):
     """Tensor-product stencil from :func:`factors`: ``idx`` (S, n) flat node indices,
     ``w`` (S, n) = N_Ip and ``grad``, a tuple of ``dim`` arrays (S, n) = dN_Ip/dx_j,
     S = k ** dim, stencil nodes in C order. The stencil axis leads (one contiguous
-    row per node): small trailing axes vectorise badly on CPU."""
+    row per node): small trailing axes vectorise badly on CPU. Each row is the product of
+    one row of each direction's factors, stacked (written as broadcasts of (k, n) blocks,
+    XLA:CPU computed every element with the index arithmetic of the broadcast: the four
+    (8, n) weight arrays of a 3D step took ~1 ns per element, measured)."""
     d = len(per_dim)
-    k, n = per_dim[0][1].shape
+    k = per_dim[0][1].shape[0]
+    nodes = list(itertools.product(range(k), repeat=d))  # C order: the last direction varies fastest
 
-    def block(a, j):  # (k, n) of direction j -> axis j of a (k,) * d + (n,) block
-        shape = [1] * d + [n]
-        shape[j] = k
-        return a.reshape(shape)
+    def rows(pick):  # pick(j, a): row a of direction j's factor -> (S, n), the rows' product per node
+        return jnp.stack([functools.reduce(operator.mul, [pick(j, a) for j, a in enumerate(node)])
+                          for node in nodes])
 
-    def flat(a):
-        return jnp.broadcast_to(a, (k,) * d + (n,)).reshape(-1, n)
-
-    idx = functools.reduce(operator.add, [block(f[0], j) for j, f in enumerate(per_dim)])
-    w = functools.reduce(operator.mul, [block(f[1], j) for j, f in enumerate(per_dim)])
-    grad = tuple(flat(functools.reduce(operator.mul, [block(f[2] if i == j else f[1], i)
-                                                      for i, f in enumerate(per_dim)])) for j in range(d))
-    return flat(idx), flat(w), grad
+    idx = jnp.stack([functools.reduce(operator.add, [per_dim[j][0][a] for j, a in enumerate(node)])
+                     for node in nodes])
+    w = rows(lambda j, a: per_dim[j][1][a])
+    grad = tuple(rows(lambda j, a, i=i: per_dim[j][2 if j == i else 1][a]) for i in range(d))
+    return idx, w, grad
 
 
 def stencil(x, half_size, grid, shape: Shape):
