@@ -247,6 +247,15 @@ def test_jc_radial_return_on_yield_surface():
                                0.9 * sy * d_eps / (np.asarray(out.density) * 477.0), rtol=1e-12)
 
 
+def test_jc_power_matches_the_general_power():
+    """power(x, a) = exp(a ln x) replaces x ** a on the JC paths: the same values to a few ulp over the
+    exponents and bases of the models (n, m in 0.1-2; strains 0-10, homologous temperatures 0-1), and
+    0^a = 0 for a > 0, 0^0 = 1 as for x ** a."""
+    x = np.concatenate([[0.0], 10.0 ** np.linspace(-12, 1, 60)])
+    for a in (0.0, 0.1, 0.26, 0.5, 1.0, 1.03, 2.0):
+        np.testing.assert_allclose(np.asarray(johnson_cook.power(jax.numpy.asarray(x), a)), x ** a, rtol=1e-14, atol=0.0)
+
+
 def test_jc_plastic_increment_closed_form_linear_hardening():
     """n = 1, C = 0 at room temperature: from a state on the yield surface, a simple-shear or a
     uniaxial-strain step gives d eps_p = (q* - A - B eps_p)/(3G + B); a small step stays elastic."""
