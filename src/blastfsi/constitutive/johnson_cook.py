@@ -22,7 +22,7 @@ Stress update per step:
    correction exceeds 1/2) below EARLY_ACCEPT = 1e-5 in u is the last: it lands within
    ~1e-15 of the root. On the yielding steel block of benchmarks/bench_mpm.py every particle
    is done in at most 5 evaluations, most in 3 (Newton's method, checking the residual at its
-   last iterate: 5-7); the step's throughput rose by ~15 %. The rate
+   last iterate: 5-7); the benchmark step ~10 % faster. The rate
    term is floored at eps_dot* = 1 (no softening below the reference rate); T* is clipped
    to [0, 1] (sigma_y = 0 at and above melt).
 4. Plastic-work heating dT = chi sigma_y d eps_p / (rho c_p), chi the Taylor-Quinney factor;
