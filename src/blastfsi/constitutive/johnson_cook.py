@@ -147,7 +147,7 @@ def plastic_increment(q_trial, eps_p, dt, temperature, p: JohnsonCookParams):
 
     # start: x0 with 1/x0 = 1/x_elastic + 1/x_hardening, the root when the rate factor is 1 and both the
     # elastic unloading 3G x and the hardening B ((eps_p + x)^n - eps_p^n) alone would absorb q* - sigma_y0
-    # (exact were both linear in x); Newton in u then needs a few steps also where the root is tiny
+    # (exact were both linear in x); the iteration in u then needs a few steps also where the root is tiny
     a = jnp.where(plastic, q_trial - y0, 0.0) / jnp.maximum(p.B * thermal, tiny)  # (eps_p + x)^n - eps_p^n
     hardened = eps_p > 0.0
     base = jnp.where(hardened, eps_p, 1.0)
