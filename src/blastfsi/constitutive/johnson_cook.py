@@ -95,7 +95,7 @@ def _residual(u, q_trial, eps_p, log_kink, thermal, three_g, p: JohnsonCookParam
     H_uu = H_u (1 + (n - 1) x / (eps_p + x))."""
     x = jnp.exp(u)
     eps = eps_p + x
-    eps_n = jnp.exp(p.n * jnp.log(eps))  # (eps_p + x)^n, eps > 0
+    eps_n = power(eps, p.n)
     hard = p.A + p.B * eps_n
     above = u > log_kink
     rate_factor = 1.0 + p.C * jnp.where(above, u - log_kink, 0.0)
