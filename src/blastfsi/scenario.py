@@ -12,19 +12,25 @@ tables all methods share keep one meaning:
 * ``[sweep]``    :class:`Sweep` (lists whose cartesian product runs as one batched call)
 
 Types are strict (no string-to-bool, string-to-number or float-to-int
-coercion; an integer is accepted where a float is expected). Unknown keys,
-missing keys, wrong types and out-of-range values are rejected with a message
-naming the dotted key, the allowed range and the value given. All quantities
-are SI (m, kg, s, Pa, J).
+coercion; an integer is accepted where a float is expected; no NaN or infinity
+anywhere). Unknown keys, missing keys, wrong types and out-of-range values are
+rejected with a message naming the dotted key, the allowed range and the value
+given; so are overrides of materials the scenario does not use and library
+constants outside their ranges (:mod:`blastfsi.materials.ranges`). After the
+model, :func:`check_resources` estimates the memory of the compiled run and
+refuses one the machine cannot hold unless ``numerics.allow_large = true``.
+All quantities are SI (m, kg, s, Pa, J).
 """
 from __future__ import annotations
 
 import copy
 import itertools
+import math
+import os
 import re
 import tomllib
 from pathlib import Path
-from typing import Any, ClassVar, Literal, Optional, Union
+from typing import Annotated, Any, ClassVar, Literal, NamedTuple, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -37,9 +43,21 @@ class ScenarioError(ValueError):
 
 
 class Strict(BaseModel):
-    """Base of every scenario table: frozen, unknown keys and type coercion refused."""
+    """Base of every scenario table: frozen, unknown keys and type coercion refused, and every number finite
+    (NaN and infinity are never physical input; a field meaning "unbounded" would say so with
+    ``pydantic.AllowInfNan``)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+# Positions [m]: 1000 km is beyond any blast or structure domain, and keeps float64 cell edges exact to ~1e-10 m.
+MAX_COORDINATE = 1e6
+Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
+
+
+# Checkpoints of one run: each is a full copy of the state on disk and a stop of the compiled loop; as many as
+# output.fields allows snapshots (a tiny checkpoint_interval would otherwise build ~1e12 stop times).
+MAX_CHECKPOINTS = 10_000
 
 
 class Time(Strict):
@@ -85,6 +103,9 @@ class Numerics(Strict):
 
     precision: Literal["float64", "float32"] = "float64"
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="time-step factor (Courant number)")
+    allow_large: bool = Field(False, description=(
+        "run even when the estimated memory exceeds what this machine has, or the sweep has more than "
+        "10 000 members (blastfsi.scenario.check_resources)"))
 
 
 class Sweep(Strict):
@@ -99,6 +120,19 @@ class Sweep(Strict):
     def members(self) -> list[dict]:
         axes = [(self.TARGETS[n], v) for n, v in self.model_dump().items() if v is not None]
         return [dict(zip([k for k, _ in axes], combo)) for combo in itertools.product(*[v for _, v in axes])]
+
+    def count(self) -> int:
+        """Number of members (the product of the list lengths), without building them."""
+        return math.prod(len(v) for v in self.model_dump().values() if v is not None)
+
+
+class Demand(NamedTuple):
+    """Memory one member's compiled time loop holds for one kind of item (:func:`check_resources`)."""
+
+    key: str  # the scenario key that sets the count, e.g. "grid.cells"
+    count: float  # items: cells, particles, history samples
+    what: str  # their name, e.g. "cells"
+    words: int  # numbers held per item: state and the step's temporaries (measured per method)
 
 
 class ScenarioBase(Strict):
@@ -122,13 +156,27 @@ class ScenarioBase(Strict):
 
     @model_validator(mode="after")
     def _shared(self):
-        if self.output.checkpoint_interval is not None and self.output.checkpoint_interval > self.time.end:
+        interval = self.output.checkpoint_interval
+        if interval is not None and interval > self.time.end:
             raise ValueError("output.checkpoint_interval must be <= time.end")
+        if interval is not None and self.time.end / interval > MAX_CHECKPOINTS:
+            raise ValueError(f"output.checkpoint_interval = {interval:g} s makes {self.time.end / interval:.3g} "
+                             f"checkpoints over time.end = {self.time.end:g} s; at most {MAX_CHECKPOINTS} (each is a "
+                             "full copy of the state on disk)")
         return self
 
     def members(self) -> list[dict]:
         """The ensemble as a list of {dotted key: value} overrides (one empty dict if no sweep)."""
         return [{}] if self.sweep is None else self.sweep.members()
+
+    def member_count(self) -> int:
+        return 1 if self.sweep is None else self.sweep.count()
+
+    def demands(self) -> list[Demand]:
+        """What one member's compiled time loop holds in memory; a method adds its cells and particles to the
+        history kept here (samples x columns: time and the method's own, up to 8 quantities per gauge)."""
+        return [Demand("output.history_samples", self.output.history_samples, "history samples",
+                       32 + 8 * len(self.output.gauges))]
 
     @classmethod
     def member_data(cls, data: dict, member: dict) -> dict:
@@ -199,44 +247,143 @@ def _location(data: Any, loc: tuple) -> str:
     return "".join(parts).lstrip(".")
 
 
-def _format_errors(err: ValidationError, data: dict) -> str:
+MAX_ERRORS = 20  # lines of an error listing (500 000 unknown keys would otherwise make a 13 MB message)
+MAX_SHOWN = 80  # characters of a value quoted in a message
+MAX_DEPTH = 16  # nesting of tables and arrays; a scenario needs 5 (bodies -> supports -> lower -> number)
+
+
+def show(value) -> str:
+    """A value as a message quotes it: plain numbers (no ``np.float64(...)``), at most MAX_SHOWN characters."""
+    if hasattr(value, "tolist"):  # NumPy scalars and arrays
+        value = value.tolist()
+    text = repr(value)
+    return text if len(text) <= MAX_SHOWN else text[:MAX_SHOWN] + " ..."
+
+
+def _error_line(e: dict, data: dict) -> str:
     sym = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
-    lines = []
-    for e in err.errors():
-        loc = _location(data, e["loc"])
-        msg = e["msg"]
-        if e["type"] == "extra_forbidden":
-            msg = "unknown key"
-        elif e["type"] == "missing":
-            msg = "missing required key"
-        ctx = e.get("ctx") or {}
-        bounds = " and ".join(f"{sym[k]} {ctx[k]}" for k in ("gt", "ge", "lt", "le") if k in ctx)
-        if bounds:
-            msg = f"{msg} (allowed: {bounds}; got {e.get('input')!r})"
-        elif e["type"] not in ("missing", "extra_forbidden", "value_error") and "input" in e \
-                and not isinstance(e["input"], dict):
-            msg = f"{msg} (got {e['input']!r})"
-        lines.append(f"  {loc or '<scenario>'}: {msg}")
+    loc = _location(data, e["loc"])
+    msg = e["msg"]
+    if e["type"] == "extra_forbidden":
+        msg = "unknown key"
+    elif e["type"] == "missing":
+        msg = "missing required key"
+    elif e["type"] == "value_error":
+        msg = msg.removeprefix("Value error, ")
+        if not loc:
+            return f"  {msg}"  # a model-level check: its message names the key(s)
+    ctx = e.get("ctx") or {}
+    bounds = " and ".join(f"{sym[k]} {show(ctx[k])}" for k in ("gt", "ge", "lt", "le") if k in ctx)
+    if bounds:
+        msg = f"{msg} (allowed: {bounds}; got {show(e.get('input'))})"
+    elif e["type"] not in ("missing", "extra_forbidden", "value_error") and "input" in e \
+            and not isinstance(e["input"], dict):
+        msg = f"{msg} (got {show(e['input'])})"
+    return f"  {loc or '<scenario>'}: {msg}"
+
+
+def _format_errors(err: ValidationError, data: dict) -> str:
+    errors = err.errors()
+    lines = [_error_line(e, data) for e in errors[:MAX_ERRORS]]
+    if len(errors) > MAX_ERRORS:
+        lines.append(f"  ... and {len(errors) - MAX_ERRORS} more")
     return "invalid scenario:\n" + "\n".join(lines)
 
 
+def validate_model(model: type[Strict], data: dict) -> Strict:
+    """``model.model_validate(data)`` with pydantic's errors as one ScenarioError naming the keys (also for
+    the models a method validates internally, e.g. the cfdmp method's Eulerian and MPM parts)."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as err:
+        raise ScenarioError(_format_errors(err, data)) from None
+
+
+def _too_deep(data, limit: int = MAX_DEPTH) -> str | None:
+    """The dotted key of the first value nested deeper than ``limit`` tables/arrays, or None (iterative: a
+    hostile file may nest thousands of levels)."""
+    stack = [(data, "", 0)]
+    while stack:
+        node, key, depth = stack.pop()
+        if depth > limit:
+            return key or "<scenario>"
+        items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+        for k, v in items:
+            stack.append((v, f"{key}[{k}]" if isinstance(k, int) else f"{key}.{k}".lstrip("."), depth + 1))
+    return None
+
+
+def check_depth(data) -> None:
+    """ScenarioError when ``data`` nests tables/arrays deeper than MAX_DEPTH."""
+    key = _too_deep(data)
+    if key is not None:
+        raise ScenarioError(f"invalid scenario:\n  {key.split('[')[0]}: tables and arrays nested deeper than "
+                            f"{MAX_DEPTH} levels")
+
+
+# Resources (check_resources). Above this share of the machine's memory a run swaps or is killed; members are
+# validated and set up one by one on the host before the first step (~10 ms each: 10 000 take minutes).
+MEMORY_FRACTION = 0.8
+MAX_MEMBERS = 10_000
+
+
+def machine_memory() -> float:
+    """Bytes of memory this process may use: the physical memory, or a lower container (cgroup) limit;
+    inf where the platform does not say."""
+    try:
+        total = float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):
+        total = math.inf
+    try:
+        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        return min(total, float(limit)) if limit.isdigit() else total
+    except OSError:
+        return total
+
+
+def _gib(n: float) -> str:
+    return f"{n / 2 ** 30:.3g} GiB"
+
+
+def check_resources(sc: ScenarioBase, members: int | None = None) -> None:
+    """ScenarioError, unless ``numerics.allow_large``, for a run of ``members`` members (default the sweep's)
+    with more than MAX_MEMBERS members or whose estimated memory (``sc.demands()``: items x numbers each x
+    the precision's bytes x members) exceeds MEMORY_FRACTION of :func:`machine_memory`."""
+    if sc.numerics.allow_large:
+        return
+    members = sc.member_count() if members is None else members
+    insist = "or set numerics.allow_large = true to run anyway"
+    if members > MAX_MEMBERS:
+        raise ScenarioError(f"sweep: {members} members, more than {MAX_MEMBERS} (each is set up on the host before "
+                            f"the first step); split the sweep, {insist}")
+    demands = sorted(sc.demands(), key=lambda d: -d.count * d.words)
+    itemsize = 4 if sc.numerics.precision == "float32" else 8
+    need = members * itemsize * sum(d.count * d.words for d in demands)
+    have = machine_memory()
+    if need > MEMORY_FRACTION * have:
+        detail = "; ".join(f"{d.key}: {d.count:.3g} {d.what} x {d.words} numbers" for d in demands)
+        per = f" x {members} sweep members" if members > 1 else ""
+        raise ScenarioError(f"{demands[0].key}: the run needs about {_gib(need)} of memory ({detail}{per}; "
+                            f"{sc.numerics.precision}) and this machine has {_gib(have)}; reduce it, {insist}")
+
+
 def parse(data: dict) -> ScenarioBase:
-    """Validate a raw scenario dict with the model of its ``method``."""
+    """Validate a raw scenario dict with the model of its ``method``, then its resources (:func:`check_resources`)."""
     from blastfsi import method as methods
 
     if not isinstance(data, dict):
         raise ScenarioError(f"a scenario is a table of keys, got {type(data).__name__}")
+    check_depth(data)
     name = data.get("method", DEFAULT_METHOD)
     if not isinstance(name, str):
-        raise ScenarioError(f"invalid scenario:\n  method: expected a string (got {name!r})")
+        raise ScenarioError(f"invalid scenario:\n  method: expected a string (got {show(name)})")
     try:
         model = methods.get(name).scenario_model
     except KeyError as err:
         raise ScenarioError(f"invalid scenario:\n  method: {err.args[0]}") from None
-    try:
-        return model.model_validate({**data, "method": name})
-    except ValidationError as err:
-        raise ScenarioError(_format_errors(err, data)) from None
+    sc = validate_model(model, {**data, "method": name})
+    check_resources(sc)
+    return sc
 
 
 def parse_value(text: str):
@@ -245,6 +392,8 @@ def parse_value(text: str):
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
+    except RecursionError:
+        raise ScenarioError(f"--set value nested deeper than {MAX_DEPTH} levels") from None
 
 
 def set_dotted(data: dict, key: str, value) -> dict:
@@ -278,9 +427,18 @@ def read_toml(path: str | Path) -> dict:
     if not path.is_file():
         raise ScenarioError(f"scenario file not found: {path}")
     try:
-        return tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as err:
+        raise ScenarioError(f"{path}: not a text (UTF-8) file: byte {err.start} is {err.object[err.start]:#04x}") \
+            from None
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"{path}: not valid TOML: {err}") from None
+    except RecursionError:
+        raise ScenarioError(f"{path}: tables or arrays nested deeper than {MAX_DEPTH} levels") from None
+    except OSError as err:
+        raise ScenarioError(f"{path}: cannot be read: {err.strerror}") from None
+    check_depth(data)
+    return data
 
 
 def expand(data: dict | list[dict]) -> tuple[ScenarioBase, list[dict], list[ScenarioBase]]:
@@ -292,6 +450,7 @@ def expand(data: dict | list[dict]) -> tuple[ScenarioBase, list[dict], list[Scen
         if not data:
             raise ScenarioError("an empty list of scenarios")
         scs = [parse(d) for d in data]
+        check_resources(scs[0], len(scs))
         for key in ("method", "time", "output"):
             if any(getattr(s, key) != getattr(scs[0], key) for s in scs):
                 raise ScenarioError(f"a batch of scenarios must share its {key!r} key/table")

@@ -14,9 +14,11 @@ from typing import Literal, Optional
 
 from pydantic import Field, model_validator
 
-from blastfsi.euler.scenario import Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_plot_plane
-from blastfsi.mpm.scenario import Body, MPMNumerics, Tracers
-from blastfsi.scenario import AXES, ScenarioBase, Strict, check_box
+from blastfsi.euler.scenario import (Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_gas_part,
+                                     gas_materials, grid_demand)
+from blastfsi.mpm.scenario import (Body, MPMNumerics, Tracers, body_materials, body_particles, lattice_count,
+                                   particle_demand)
+from blastfsi.scenario import AXES, Coordinate, Demand, ScenarioBase, Strict, check_box
 
 # Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
 # read when updating the bridge: the fictitious cells of 000 Eqs. (31)-(36). Structures stay beyond them.
@@ -26,8 +28,8 @@ FICTITIOUS_DEPTH = 4
 class MPMRegion(Strict):
     """The MPM box, its bridge and the activation of the coupling."""
 
-    lower: list[float] = Field(min_length=1, max_length=3, description="lower corner [m] (on cell faces)")
-    upper: list[float] = Field(min_length=1, max_length=3, description="upper corner [m] (on cell faces)")
+    lower: list[Coordinate] = Field(min_length=1, max_length=3, description="lower corner [m] (on cell faces)")
+    upper: list[Coordinate] = Field(min_length=1, max_length=3, description="upper corner [m] (on cell faces)")
     bridge_cells: int = Field(5, ge=1, le=50, description="bridge width w [cells] on every face bordering the "
                                                           "Eulerian region (000 Sec. 3.1)")
     activation_overpressure: float = Field(0.0, ge=0.0, description=(
@@ -122,5 +124,17 @@ class CfdmpScenario(ScenarioBase):
                                  "no [[structures]]")
             if len(p) != nd:
                 raise ValueError(f"output.tracers[{k}] = {p}: expected {nd} coordinate(s)")
-        check_plot_plane(self.output, d)
+            if not all(lo <= c <= hi for c, lo, hi in zip(p, box.lower, box.upper)):
+                raise ValueError(f"output.tracers[{k}] = {p} m lies outside mpm_region (tracers follow structure "
+                                 "particles)")
+        check_gas_part(self, {**body_materials(self.structures, "structures"), **gas_materials(self.initial)})
         return self
+
+    def demands(self) -> list[Demand]:
+        """The grid, and the particle pool: numerics.capacity, or the default pool's pool_headroom x the box's
+        gas particles plus the structures' (blastfsi.problems.cfdmp)."""
+        box, nd = self.mpm_region, self.domain.ndim
+        dx = (self.domain.upper[0] - self.domain.lower[0]) / self.grid.cells
+        gas = lattice_count([hi - lo for lo, hi in zip(box.lower, box.upper)], dx, box.gas_particles_per_cell)
+        particles = self.numerics.pool_headroom * gas + sum(body_particles(s, dx, nd) for s in self.structures)
+        return super().demands() + [grid_demand(self), particle_demand(self.numerics.capacity, particles, "mpm_region")]

@@ -27,6 +27,7 @@ import jax.numpy as jnp
 from blastfsi.constitutive import Model, PointState, register
 from blastfsi.constitutive import tensor as T
 from blastfsi.constitutive.elastic import hooke_increment, moduli
+from blastfsi.materials import ranges
 
 
 class DruckerPragerParams(NamedTuple):
@@ -79,15 +80,7 @@ def wave_speed(ps: PointState, params: DruckerPragerParams):
 
 
 def params_from(material) -> DruckerPragerParams:
-    if not material.cohesion >= 0.0:
-        raise ValueError(f"cohesion must be >= 0 Pa, got {material.cohesion}")
-    if not 0.0 <= material.friction_angle < 90.0:
-        raise ValueError(f"friction_angle must be in [0, 90) degrees, got {material.friction_angle}")
-    if not 0.0 <= material.dilation_angle <= material.friction_angle:
-        raise ValueError(f"dilation_angle must be in [0, friction_angle = {material.friction_angle}] degrees, "
-                         f"got {material.dilation_angle}")
-    if not material.tensile_strength >= 0.0:
-        raise ValueError(f"tensile_strength must be >= 0 Pa, got {material.tensile_strength}")
+    ranges.check(material)  # every constant in its range and order (blastfsi.materials.solids.DruckerPragerSoil)
     el = moduli(material.youngs_modulus, material.poisson_ratio)
     k_phi, q_phi = cone(material.cohesion, material.friction_angle)
     _, q_psi = cone(0.0, material.dilation_angle)

@@ -13,12 +13,15 @@ Axes and geometries:
 """
 from __future__ import annotations
 
+import math
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Field, model_validator
 
+from blastfsi.materials import check_overrides, lookup
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import AXES, Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
+from blastfsi.scenario import (AXES, Coordinate, Demand, Output, ScenarioBase, Strict, Sweep, check_box,
+                               gauge_points)
 
 Vector = Union[float, list[float]]
 Limiter = Literal["van-leer", "minmod", "mc"]  # numerics.limiter of hllc-muscl (euler and cfdmp methods)
@@ -96,8 +99,8 @@ Initial = Annotated[Union[RiemannInitial, PointEnergyInitial, ChargeInitial], Fi
 
 class Domain(Strict):
     geometry: Literal["cartesian", "cylindrical", "spherical", "axisymmetric"] = "cartesian"
-    lower: list[float] = Field(min_length=1, max_length=3, description="lower corner [m]")
-    upper: list[float] = Field(min_length=1, max_length=3, description="upper corner [m]")
+    lower: list[Coordinate] = Field(min_length=1, max_length=3, description="lower corner [m]")
+    upper: list[Coordinate] = Field(min_length=1, max_length=3, description="upper corner [m]")
 
     @model_validator(mode="after")
     def _box(self):
@@ -114,6 +117,11 @@ class Domain(Strict):
     @property
     def ndim(self) -> int:
         return len(self.lower)
+
+    def cell_count(self, cells_x: int) -> float:
+        """Cells of the grid of ``cells_x`` square cells along x (a float: may be astronomically many)."""
+        dx = (self.upper[0] - self.lower[0]) / cells_x
+        return math.prod(max(1.0, round((hi - lo) / dx)) for lo, hi in zip(self.lower, self.upper))
 
 
 BoundaryPair = Annotated[list[Literal["outflow", "wall", "symmetry", "axis", "periodic"]], Field(min_length=2, max_length=2)]
@@ -159,6 +167,58 @@ def check_plot_plane(output: EulerOutput, domain) -> None:
                          f"[{domain.lower[2]:g}, {domain.upper[2]:g}] m")
 
 
+def gas_materials(initial) -> dict[str, str]:
+    """The library materials an initial condition uses: name -> the scenario key naming it first."""
+    if initial.kind == "riemann":
+        pairs = [("initial.left.material", initial.left.material), ("initial.right.material", initial.right.material)]
+    elif initial.kind == "point-energy":
+        pairs = [("initial.ambient.material", initial.ambient.material)]
+    else:  # a charge; its ambient defaults to the library's air (blastfsi.detonation.charge)
+        pairs = [("initial.explosive", initial.explosive),
+                 ("initial.ambient.material", "air" if initial.ambient is None else initial.ambient.material)]
+    used = {}
+    for key, name in pairs:
+        used.setdefault(name, key)
+    return used
+
+
+def check_gas_part(sc, used: dict[str, str]) -> None:
+    """The checks the euler and cfdmp models share: the ``[materials]`` table against the materials in
+    ``used``; gauges, the plot plane and the release point or charge centre inside the domain; a given
+    charge remap time before the blast has crossed the whole domain."""
+    d, init = sc.domain, sc.initial
+    check_overrides(sc.materials, used)
+    gauge_points(sc.output.gauges, d.ndim, d.lower, d.upper)
+    check_plot_plane(sc.output, d)
+    if init.kind in ("point-energy", "charge") and init.center:
+        c = init.center
+        if len(c) != d.ndim or not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper)):
+            extent = ", ".join(f"{a} in [{lo:g}, {hi:g}]" for a, lo, hi in zip(AXES, d.lower, d.upper))
+            raise ValueError(f"initial.center = {c} must be {d.ndim} coordinate(s) inside the domain ({extent} m)")
+    if init.kind == "charge" and init.remap_time is not None:
+        _check_remap_time(sc)
+
+
+def _check_remap_time(sc) -> None:
+    """A blast's leading shock outruns the ambient sound speed, itself above the isothermal one sqrt(p / rho)
+    (gamma > 1): a remap time at which the shock has passed the farthest corner of the domain can only fail,
+    and only after the 1D detonation has run to it (minutes), so it is refused here."""
+    d, init = sc.domain, sc.initial
+    if init.ambient is None:
+        air = lookup("air", sc.materials.get("air"))
+        density, pressure = air.density, air.pressure
+    else:
+        density, pressure = init.ambient.density, init.ambient.pressure
+    speed = math.sqrt(pressure / density)
+    centre = init.center or [0.0] * d.ndim
+    reach = math.hypot(*(max(abs(c - lo), abs(hi - c)) for c, lo, hi in zip(centre, d.lower, d.upper)))
+    if init.remap_time * speed > reach:
+        raise ValueError(f"initial.remap_time = {init.remap_time:g} s: the blast front, faster than "
+                         f"sqrt(p / rho) = {speed:.4g} m/s, crosses the whole domain (its farthest point is "
+                         f"{reach:.4g} m from the charge) before {reach / speed:.3g} s; give an earlier time, or none "
+                         "for the automatic one")
+
+
 class EulerSweep(Sweep):
     """Ensemble over the released energy (point-energy) or the Courant number."""
 
@@ -181,14 +241,20 @@ class EulerScenario(ScenarioBase):
 
     @model_validator(mode="after")
     def _inside(self):
-        d = self.domain
-        gauge_points(self.output.gauges, d.ndim, d.lower, d.upper)
-        check_plot_plane(self.output, d)
+        check_gas_part(self, gas_materials(self.initial))
         if self.sweep is not None and self.sweep.energy is not None and self.initial.kind != "point-energy":
             raise ValueError("sweep.energy needs initial.kind = 'point-energy'")
-        if self.initial.kind in ("point-energy", "charge") and self.initial.center:
-            c = self.initial.center
-            if len(c) != d.ndim or not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper)):
-                extent = ", ".join(f"{a} in [{lo:g}, {hi:g}]" for a, lo, hi in zip(AXES, d.lower, d.upper))
-                raise ValueError(f"initial.center = {c} must be {d.ndim} coordinate(s) inside the domain ({extent} m)")
         return self
+
+    def demands(self) -> list[Demand]:
+        return super().demands() + [grid_demand(self)]
+
+
+# Numbers per cell the compiled Eulerian loop holds: state (up to 7 conserved rows and 5 blast maps) and the
+# step's primitives, slopes and fluxes; XLA's memory analysis of sedov-3d at 24^3 cells: 80 (53 in 2D).
+WORDS_PER_CELL = 80
+
+
+def grid_demand(sc) -> Demand:
+    """The Eulerian grid's memory (euler and cfdmp)."""
+    return Demand("grid.cells", sc.domain.cell_count(sc.grid.cells), "cells", WORDS_PER_CELL)

@@ -8,13 +8,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from blastfsi.eos.jwl import JWLParams, ideal_gas_params
+from blastfsi.materials.ranges import constant
+
+GAMMA_MAX = 5.0 / 3.0  # a monatomic gas has the largest ratio of specific heats of any ideal gas
+_DENSITY = "a mass per unit volume is positive"
 
 
 @dataclass(frozen=True)
 class IdealGasMaterial:
-    gamma: float
-    density: float  # ambient density [kg/m^3]
-    specific_energy: float  # ambient specific internal energy [J/kg]
+    gamma: float = constant("p = (gamma - 1) rho e: gamma > 1 for a thermodynamically valid ideal gas (positive "
+                            "pressure and sound speed); at most 5/3, the monatomic gas", gt=1.0, le=GAMMA_MAX)
+    density: float = constant(_DENSITY, gt=0.0)  # ambient density [kg/m^3]
+    specific_energy: float = constant("an ideal gas at positive pressure has e = p / ((gamma - 1) rho) > 0",
+                                      gt=0.0)  # ambient specific internal energy [J/kg]
     description: str = ""
     sources: dict = field(default_factory=dict, compare=False)
 
@@ -28,14 +34,21 @@ class IdealGasMaterial:
 
 @dataclass(frozen=True)
 class JWLExplosive:
-    A: float  # [Pa]
-    B: float  # [Pa]
-    R1: float
-    R2: float
-    omega: float
-    E0: float  # detonation energy per unit initial volume [J/m^3]
-    density: float  # unreacted explosive density rho0 [kg/m^3]
-    detonation_velocity: float  # D [m/s]
+    A: float = constant("amplitude of the high-pressure term; A < 0 makes the products' pressure fall under "
+                        "compression", ge=0.0)  # [Pa]
+    B: float = constant("amplitude of the intermediate term; either sign occurs in published fits, "
+                        "its size is bounded by A's", ge=-1e13, le=1e13)  # [Pa]
+    R1: float = constant("decay rate of the A term with expansion; <= 0 makes the pressure grow without bound "
+                         "as the products expand", gt=0.0)
+    R2: float = constant("decay rate of the B term with expansion, as R1", gt=0.0)
+    omega: float = constant("Grueneisen coefficient of the expanded products, the ideal gas p = omega rho e of "
+                            "gamma = 1 + omega: > 0 for a positive pressure, <= 2/3 (gamma <= 5/3)",
+                            gt=0.0, le=GAMMA_MAX - 1.0)
+    E0: float = constant("detonation energy released per unit initial volume; an explosive releases energy",
+                         gt=0.0)  # [J/m^3]
+    density: float = constant(_DENSITY, gt=0.0)  # unreacted explosive density rho0 [kg/m^3]
+    detonation_velocity: float = constant("the burn front moves outwards, and no explosive detonates faster "
+                                          "than about 10 km/s", gt=0.0, le=2e4)  # D [m/s]
     description: str = ""
     sources: dict = field(default_factory=dict, compare=False)
 

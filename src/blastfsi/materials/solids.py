@@ -28,13 +28,23 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from blastfsi.materials.ranges import Order, constant
+
+# Reasons shared by several families (materials.ranges: every constant has a range and its physical reason).
+_DENSITY = "a mass per unit volume is positive"
+_MODULUS = "an elastic modulus is positive, or the material has no stiffness (or a negative one)"
+_POISSON = "-1 < nu < 0.5 keeps the bulk and shear moduli positive (a stable, positive-definite elasticity)"
+_STRENGTH = "a strength (stress) is non-negative"
+_RATE0 = "reference strain rate: the log-rate term ln(rate / rate0) needs rate0 > 0"
+_NONNEG = "a hardening or rate coefficient < 0 would soften the material as it is loaded harder"
+
 
 @dataclass(frozen=True)
 class LinearElasticSolid:
     model: ClassVar[str] = "elastic"
-    density: float  # [kg/m^3]
-    youngs_modulus: float  # E [Pa]
-    poisson_ratio: float  # nu [-]
+    density: float = constant(_DENSITY, gt=0.0)  # [kg/m^3]
+    youngs_modulus: float = constant(_MODULUS, gt=0.0)  # E [Pa]
+    poisson_ratio: float = constant(_POISSON, gt=-1.0, lt=0.5)  # nu [-]
     description: str = ""
     sources: dict = field(default_factory=dict, compare=False)
 
@@ -43,22 +53,29 @@ class LinearElasticSolid:
 class JohnsonCookSolid:
     """Johnson-Cook strength (000 Eq. 64) + Mie-Grueneisen EOS (000 Eqs. 65-66)."""
     model: ClassVar[str] = "johnson-cook"
-    density: float  # reference density rho0 [kg/m^3]
-    shear_modulus: float  # G [Pa]
-    A: float  # yield stress [Pa]
-    B: float  # hardening modulus [Pa]
-    n: float  # hardening exponent [-]
-    C: float  # strain-rate coefficient [-]
-    m: float  # thermal-softening exponent [-]
-    reference_strain_rate: float  # [1/s]
-    room_temperature: float  # [K]
-    melt_temperature: float  # [K]
-    specific_heat: float  # c_p [J/(kg K)]
-    taylor_quinney: float  # fraction of plastic work converted to heat [-]
-    C0: float  # Hugoniot U_s = C0 + S u_p intercept [m/s]
-    S: float  # Hugoniot slope [-]
-    gamma0: float  # Grueneisen coefficient [-]
-    a: float  # Gamma = gamma0 + a mu [-]
+    ORDER: ClassVar[tuple] = (Order("room_temperature", "melt_temperature", "the homologous temperature "
+                                    "T* = (T - T_room) / (T_melt - T_room) needs a melting point above room "
+                                    "temperature"),)
+    density: float = constant(_DENSITY, gt=0.0)  # reference density rho0 [kg/m^3]
+    shear_modulus: float = constant(_MODULUS, gt=0.0)  # G [Pa]
+    A: float = constant("yield stress: " + _STRENGTH, ge=0.0)  # yield stress [Pa]
+    B: float = constant("hardening modulus: " + _NONNEG, ge=0.0)  # hardening modulus [Pa]
+    n: float = constant("hardening exponent: B eps_p^n hardens monotonically only for n >= 0 (n < 0 is "
+                        "infinite at yield)", ge=0.0)  # hardening exponent [-]
+    C: float = constant("strain-rate coefficient: " + _NONNEG, ge=0.0)  # strain-rate coefficient [-]
+    m: float = constant("thermal-softening exponent: 1 - T*^m falls from 1 at room temperature to 0 at melt "
+                        "only for m > 0", gt=0.0)  # thermal-softening exponent [-]
+    reference_strain_rate: float = constant(_RATE0, gt=0.0)  # [1/s]
+    room_temperature: float = constant("an absolute temperature is positive", gt=0.0)  # [K]
+    melt_temperature: float = constant("an absolute temperature is positive", gt=0.0)  # [K]
+    specific_heat: float = constant("heat raises the temperature: c_p > 0", gt=0.0)  # c_p [J/(kg K)]
+    taylor_quinney: float = constant("a fraction of the plastic work", ge=0.0, le=1.0)  # to heat [-]
+    C0: float = constant("the bulk sound speed is positive", gt=0.0)  # Hugoniot U_s = C0 + S u_p intercept [m/s]
+    S: float = constant("Hugoniot slope: the shock speed does not fall with the particle speed", ge=0.0)  # [-]
+    gamma0: float = constant("Grueneisen coefficient: heating at constant volume raises the pressure",
+                             ge=0.0)  # [-]
+    a: float = constant("first-order volume correction of Gamma = gamma0 + a mu: a >= 0 keeps Gamma >= 0 "
+                        "under compression", ge=0.0)  # [-]
     description: str = ""
     sources: dict = field(default_factory=dict, compare=False)
 
@@ -67,31 +84,45 @@ class JohnsonCookSolid:
 class HJCConcrete:
     """Holmquist-Johnson-Cook concrete (000 Eqs. 56-57) with Jiang tensile damage (000 Eq. 58)."""
     model: ClassVar[str] = "hjc"
-    density: float  # rho0 [kg/m^3]
-    shear_modulus: float  # G [Pa]
-    fc: float  # quasi-static uniaxial compressive strength f_c' [Pa]
-    A: float  # normalised cohesive strength [-]
-    B: float  # normalised pressure hardening [-]
-    N: float  # pressure hardening exponent [-]
-    C: float  # strain-rate coefficient [-]
-    SMAX: float  # normalised maximum strength [-]
-    reference_strain_rate: float  # [1/s]
-    T: float  # maximum tensile hydrostatic pressure [Pa]
-    D1: float  # damage constant [-]
-    D2: float  # damage exponent [-]
-    EFMIN: float  # minimum plastic strain to fracture [-]
-    P_crush: float  # [Pa]
-    mu_crush: float  # [-]
-    K1: float  # [Pa]
-    K2: float  # [Pa]
-    K3: float  # [Pa]
-    P_lock: float  # [Pa]
-    mu_lock: float  # [-]
-    tensile_damage_rate: float  # Jiang a [1/s]
-    tensile_threshold: float  # Jiang sigma_0 [Pa]
-    tensile_exponent: float  # Jiang gamma [-]
-    initial_tensile_damage: float  # D_t at t = 0 [-] (Eq. 58 is logistic: D_t = 0 never grows)
-    tensile_damage_limit: float  # spall when D_t reaches it [-]
+    ORDER: ClassVar[tuple] = (
+        Order("P_crush", "P_lock", "the compaction (crush) line runs from P_crush up to P_lock"),
+        Order("initial_tensile_damage", "tensile_damage_limit", "tensile damage grows from its initial value "
+                                                                "to the spall limit"))
+    density: float = constant(_DENSITY, gt=0.0)  # rho0 [kg/m^3]
+    shear_modulus: float = constant(_MODULUS, gt=0.0)  # G [Pa]
+    fc: float = constant("the normalising compressive strength f_c' > 0 (stresses are divided by it)",
+                         gt=0.0)  # quasi-static uniaxial compressive strength f_c' [Pa]
+    A: float = constant("normalised cohesion: " + _STRENGTH, ge=0.0)  # normalised cohesive strength [-]
+    B: float = constant("pressure hardening: " + _NONNEG, ge=0.0)  # normalised pressure hardening [-]
+    N: float = constant("pressure-hardening exponent: B P*^N rises with pressure only for N > 0",
+                        gt=0.0)  # [-]
+    C: float = constant("strain-rate coefficient: " + _NONNEG, ge=0.0)  # [-]
+    SMAX: float = constant("the normalised strength cap is positive", gt=0.0)  # normalised maximum strength [-]
+    reference_strain_rate: float = constant(_RATE0, gt=0.0)  # [1/s]
+    T: float = constant("tensile strength (normalises T* = T / f_c'): the concrete holds some tension",
+                        gt=0.0)  # maximum tensile hydrostatic pressure [Pa]
+    D1: float = constant("damage constant: the plastic strain to fracture D1 (P* + T*)^D2 is positive",
+                         gt=0.0)  # [-]
+    D2: float = constant("damage exponent: the strain to fracture grows with pressure", ge=0.0)  # [-]
+    EFMIN: float = constant("minimum strain to fracture: damage divides the plastic strain by it",
+                            gt=0.0)  # [-]
+    P_crush: float = constant("crush pressure: the end of the elastic range lies in compression", gt=0.0)  # [Pa]
+    mu_crush: float = constant("volumetric strain at P_crush: compression is positive", gt=0.0)  # [-]
+    K1: float = constant("bulk modulus of the fully dense material: " + _MODULUS, gt=0.0)  # [Pa]
+    K2: float = constant("second-order coefficient of the dense curve: either sign (HJC 1993 has K2 < 0); "
+                         "P_lock must be reached (checked by the model)", ge=-1e15, le=1e15)  # [Pa]
+    K3: float = constant("third-order coefficient of the dense curve: either sign, as K2", ge=-1e15,
+                         le=1e15)  # [Pa]
+    P_lock: float = constant("locking pressure (full compaction) lies in compression", gt=0.0)  # [Pa]
+    mu_lock: float = constant("locking volumetric strain: compression is positive", gt=0.0)  # [-]
+    tensile_damage_rate: float = constant("Jiang growth rate: damage does not heal", ge=0.0)  # Jiang a [1/s]
+    tensile_threshold: float = constant("Jiang over-stress normalisation sigma_0: a positive stress",
+                                        gt=0.0)  # Jiang sigma_0 [Pa]
+    tensile_exponent: float = constant("Jiang exponent: damage grows with the over-stress", gt=0.0)  # gamma [-]
+    initial_tensile_damage: float = constant("Eq. 58 is logistic: D_t = 0 never grows, D_t = 1 is spalled",
+                                             gt=0.0, lt=1.0)  # D_t at t = 0 [-]
+    tensile_damage_limit: float = constant("a damage fraction; Eq. 58 tends to 1 only asymptotically",
+                                           gt=0.0, lt=1.0)  # spall when D_t reaches it [-]
     description: str = ""
     sources: dict = field(default_factory=dict, compare=False)
 
@@ -100,13 +131,17 @@ class HJCConcrete:
 class DruckerPragerSoil:
     """Drucker-Prager with shear and tension failure (000 Eqs. 59-63)."""
     model: ClassVar[str] = "drucker-prager"
-    density: float  # [kg/m^3]
-    youngs_modulus: float  # [Pa]
-    poisson_ratio: float  # [-]
-    cohesion: float  # c [Pa]
-    friction_angle: float  # phi [degrees]
-    dilation_angle: float  # psi [degrees]
-    tensile_strength: float  # sigma^t [Pa] (capped at the cone apex k_phi/q_phi)
+    ORDER: ClassVar[tuple] = (Order("dilation_angle", "friction_angle", "a soil dilates no more than the "
+                                    "associated flow rule (psi <= phi) would make it", strict=False),)
+    density: float = constant(_DENSITY, gt=0.0)  # [kg/m^3]
+    youngs_modulus: float = constant(_MODULUS, gt=0.0)  # [Pa]
+    poisson_ratio: float = constant(_POISSON, gt=-1.0, lt=0.5)  # [-]
+    cohesion: float = constant("cohesion: " + _STRENGTH, ge=0.0)  # c [Pa]
+    friction_angle: float = constant("an angle of internal friction in [0, 90) degrees (tan(phi) finite)",
+                                     ge=0.0, lt=90.0)  # phi [degrees]
+    dilation_angle: float = constant("a dilation angle in [0, 90) degrees", ge=0.0, lt=90.0)  # psi [degrees]
+    tensile_strength: float = constant("tensile strength: " + _STRENGTH, ge=0.0)  # sigma^t [Pa] (capped at the
+    #                                                                                apex k_phi/q_phi)
     description: str = ""
     sources: dict = field(default_factory=dict, compare=False)
 

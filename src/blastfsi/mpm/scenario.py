@@ -24,13 +24,15 @@ Tables:
 """
 from __future__ import annotations
 
+import math
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Field, field_validator, model_validator
 
+from blastfsi.materials import check_overrides
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
+from blastfsi.scenario import Coordinate, Demand, Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
 
 Vector = Union[float, list[float]]
 FaceKind = Literal["free", "slip", "fixed"]
@@ -46,8 +48,8 @@ class Boundaries(Strict):
 
 
 class GridSpec(Strict):
-    lower: list[float] = Field(min_length=1, max_length=3, description="lower corner [m]")
-    upper: list[float] = Field(min_length=1, max_length=3, description="upper corner [m]")
+    lower: list[Coordinate] = Field(min_length=1, max_length=3, description="lower corner [m]")
+    upper: list[Coordinate] = Field(min_length=1, max_length=3, description="upper corner [m]")
     cells: int = Field(ge=2, le=100_000, description="cells along x (square/cubic cells)")
     axisymmetric: bool = Field(False, description="2D r-z grid (x = r >= 0, y = z)")
     boundaries: Boundaries = Boundaries()
@@ -76,9 +78,9 @@ class Body(Strict):
     ``length`` along z; axisymmetric: a box r in [0, radius], z in center +- length/2)."""
 
     shape: Literal["box", "cylinder"] = "box"
-    lower: Optional[list[float]] = Field(None, min_length=1, max_length=3, description="box lower corner [m]")
-    upper: Optional[list[float]] = Field(None, min_length=1, max_length=3, description="box upper corner [m]")
-    center: Optional[list[float]] = Field(None, min_length=2, max_length=3, description="cylinder centre [m]")
+    lower: Optional[list[Coordinate]] = Field(None, min_length=1, max_length=3, description="box lower corner [m]")
+    upper: Optional[list[Coordinate]] = Field(None, min_length=1, max_length=3, description="box upper corner [m]")
+    center: Optional[list[Coordinate]] = Field(None, min_length=2, max_length=3, description="cylinder centre [m]")
     radius: Optional[float] = Field(None, gt=0.0, description="cylinder radius [m]")
     length: Optional[float] = Field(None, gt=0.0, description="cylinder length along its axis [m] (not in 2D plane)")
     material: str = Field(min_length=1, description="material name from the library")
@@ -121,8 +123,8 @@ class Support(Strict):
     velocity, all components; the grid nodes they touch take it), as a bolted or welded edge is in a test
     rig, the *BOUNDARY_SPC of a node set in LS-DYNA."""
 
-    lower: list[float] = Field(min_length=1, max_length=3, description="support box lower corner [m]")
-    upper: list[float] = Field(min_length=1, max_length=3, description="support box upper corner [m]")
+    lower: list[Coordinate] = Field(min_length=1, max_length=3, description="support box lower corner [m]")
+    upper: list[Coordinate] = Field(min_length=1, max_length=3, description="support box upper corner [m]")
 
     @model_validator(mode="after")
     def _box(self):
@@ -179,6 +181,46 @@ class MPMSweep(Sweep):
     TARGETS: ClassVar[dict[str, str]] = {"velocity": "impactor.velocity", "cfl": "numerics.cfl"}
     velocity: Optional[list[Annotated[float, Field(gt=0.0, le=1e4)]]] = Field(None, min_length=1)
     cfl: Optional[list[Annotated[float, Field(gt=0.0, le=1.0)]]] = Field(None, min_length=1)
+
+
+def body_materials(bodies: list[Body], key: str) -> dict[str, str]:
+    """The library materials of ``bodies`` (the scenario list ``key``): name -> the key naming it first."""
+    used = {}
+    for k, b in enumerate(bodies):
+        used.setdefault(b.material, f"{key}[{k}].material")
+    return used
+
+
+def lattice_count(sides, h: float, per_cell: int) -> float:
+    """Particles of a box of the given side lengths filled with ``per_cell`` particles per cell of side h and
+    direction (at least one per direction)."""
+    return math.prod(max(1.0, s / h * per_cell) for s in sides)
+
+
+def body_particles(body: Body, h: float, ndim: int) -> float:
+    """Particles a body creates on cells of side h (its bounding box: at most 4/pi too many for a cylinder)."""
+    if body.shape == "box":
+        sides = [hi - lo for lo, hi in zip(body.lower, body.upper)]
+    elif body.length is None:  # a disk of a 2D plane-strain grid
+        sides = [2.0 * body.radius] * 2
+    else:  # 3D, the axis along z; r-z, r in [0, radius] (over-counted twice)
+        sides = [2.0 * body.radius] * (ndim - 1) + [body.length]
+    return lattice_count(sides, h, body.particles_per_cell)
+
+
+# Numbers the compiled MUSL loop holds per particle (the particle state, ~33, and the step's gathers and
+# scatters; XLA's memory analysis of taylor-bar, 6000 particles on 2100 cells: 94) and per grid node (mass,
+# momentum, force and boundary masks with their temporaries; an estimate, small beside the particles).
+WORDS_PER_PARTICLE = 100
+WORDS_PER_NODE = 24
+
+
+def particle_demand(capacity: int | None, particles: float, key: str) -> Demand:
+    """The particle pool's memory: ``numerics.capacity`` when set, else ``particles`` (set by the scenario key
+    ``key``)."""
+    if capacity is not None:
+        return Demand("numerics.capacity", capacity, "particles", WORDS_PER_PARTICLE)
+    return Demand(key, particles, "particles", WORDS_PER_PARTICLE)
 
 
 class MPMScenario(ScenarioBase):
@@ -239,4 +281,23 @@ class MPMScenario(ScenarioBase):
             raise ValueError("impactor: needs a 2D or 3D grid (the rod's axis is the last axis)")
         if self.sweep is not None and self.sweep.velocity is not None and self.impactor is None:
             raise ValueError("sweep.velocity needs an [impactor]")
+        used = body_materials(self.bodies, "bodies")
+        if self.impactor is not None:
+            used.setdefault(self.impactor.material, "impactor.material")
+        check_overrides(self.materials, used)
+        for k, p in enumerate(self.output.tracers):
+            if not all(lo <= c <= hi for c, lo, hi in zip(p, g.lower, g.upper)):
+                raise ValueError(f"output.tracers[{k}] = {p} m lies outside the grid {g.lower} - {g.upper} m")
         return self
+
+    def demands(self) -> list[Demand]:
+        """The grid nodes and the particle pool (numerics.capacity, or the bodies' and the impactor's)."""
+        g = self.grid
+        h = (g.upper[0] - g.lower[0]) / g.cells
+        nodes = math.prod(round((hi - lo) / h) + 1 for lo, hi in zip(g.lower, g.upper))
+        particles = sum(body_particles(b, h, g.ndim) for b in self.bodies)
+        if self.impactor is not None:
+            rod = self.impactor
+            particles += lattice_count([rod.diameter] * (g.ndim - 1) + [rod.length], h, rod.particles_per_cell)
+        pool = particle_demand(self.numerics.capacity, particles, "bodies" if self.bodies else "impactor")
+        return super().demands() + [Demand("grid.cells", nodes, "grid nodes", WORDS_PER_NODE), pool]

@@ -31,13 +31,12 @@ from blastfsi.constitutive import get as get_model
 from blastfsi.euler import geometry
 from blastfsi.euler.config import Config as EulerConfig
 from blastfsi.euler.method import GEOMETRY_CODE
-from blastfsi.euler.scenario import EulerScenario
-from blastfsi.scenario import AXES
+from blastfsi.euler.scenario import EulerScenario, gas_materials
 from blastfsi.materials import MaterialError, lookup
-from blastfsi.mpm.scenario import MPMScenario
+from blastfsi.mpm.scenario import MPMScenario, body_materials
 from blastfsi.problems import euler as euler_problem
 from blastfsi.problems import mpm as mpm_problem
-from blastfsi.scenario import ScenarioError
+from blastfsi.scenario import AXES, ScenarioError, validate_model
 
 
 @dataclass(frozen=True)
@@ -115,6 +114,7 @@ def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
                                   "time", "output"})
     del data["output"]["tracers"]  # (the structures' points, resolved by _structures)
     euler_cfl = sc.numerics.euler_cfl or sc.numerics.cfl  # (euler_cfl > 0 when set)
+    data["materials"] = {k: v for k, v in sc.materials.items() if k in gas_materials(sc.initial)}
     data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "limiter": sc.numerics.limiter,
                                           "cfl": euler_cfl, "precision": sc.numerics.precision})
     if sc.initial.kind == "charge" and sc.initial.remap_time is None:
@@ -122,7 +122,7 @@ def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
         nearest = np.clip(centre, sc.mpm_region.lower, sc.mpm_region.upper)
         if np.any(nearest != centre):  # (a charge inside the box: MPM everywhere, the gauges set the time)
             data["output"]["gauges"] = list(data["output"]["gauges"]) + [nearest.tolist()]
-    return EulerScenario.model_validate(data)
+    return validate_model(EulerScenario, data)
 
 
 def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
@@ -130,17 +130,20 @@ def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
     the index of each output.tracers particle, clamped whether some structure has supports."""
     if not sc.structures:
         return [], [], [], None, np.zeros(0, int), (), False
-    msc = MPMScenario.model_validate({
-        "method": "mpm", "name": sc.name, "time": {"end": sc.time.end},
-        "grid": {"lower": list(grid.origin), "upper": list(grid.upper), "cells": grid.cells[0],
-                 "axisymmetric": grid.axisymmetric,
-                 "boundaries": {a: list(k) for a, k in zip(AXES, faces_kinds)}},
-        "bodies": [b.model_dump() for b in sc.structures], "materials": sc.materials,
-        "numerics": {"shape": sc.numerics.shape}, "output": {"tracers": sc.output.tracers}})
+    used = body_materials(sc.structures, "structures")
     try:
+        msc = validate_model(MPMScenario, {
+            "method": "mpm", "name": sc.name, "time": {"end": sc.time.end},
+            "grid": {"lower": list(grid.origin), "upper": list(grid.upper), "cells": grid.cells[0],
+                     "axisymmetric": grid.axisymmetric,
+                     "boundaries": {a: list(k) for a, k in zip(AXES, faces_kinds)}},
+            "bodies": [b.model_dump() for b in sc.structures],
+            "materials": {k: v for k, v in sc.materials.items() if k in used},
+            "numerics": {"shape": sc.numerics.shape}, "output": {"tracers": sc.output.tracers}})
         s = mpm_problem.build(msc)
-    except ScenarioError as err:
-        raise ScenarioError(str(err).replace("bodies[", "structures[")) from None
+    except ScenarioError as err:  # in the keys of this scenario: the MPM grid is the box (and its bridge faces)
+        text = str(err).replace("bodies[", "structures[").replace("the grid", "the MPM box (mpm_region)")
+        raise ScenarioError(text) from None
     n = s.body.size
     batch = mpm.Particles(*[np.asarray(a)[:n] if not isinstance(a, tuple) else type(a)(*[np.asarray(b)[:n] for b in a])
                             for a in s.particles])
@@ -302,7 +305,8 @@ def build(sc: CfdmpScenario) -> Setup:
         ring_x[:, ax] = g.lower[ax] + (i + 0.5) * dx
     ring_half = np.zeros_like(ring_x)
     ring_half[:, :nd] = 0.5 * dx
-    if axisymmetric:  # (mpm.lattice of each ring cell: positions, ring volumes 2 pi r s^2, half-sizes s/2)
+    if axisymmetric and ring_cells.size:  # (mpm.lattice of each ring cell: positions, ring volumes 2 pi r s^2,
+        #                                     half-sizes s/2)
         points = [mpm.lattice(grid, x[:2] - 0.5 * dx, x[:2] + 0.5 * dx, ppc) for x in ring_x]
         ring_x, ring_volume, ring_half = (np.concatenate(parts) for parts in zip(*points))
         ring_cells = np.repeat(ring_cells, ppc ** 2)

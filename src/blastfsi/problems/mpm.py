@@ -108,8 +108,8 @@ def _fill(grid: mpm.Grid, lower, upper, per_cell: int, key: str):
     g_lo, g_hi = np.asarray(grid.origin), np.asarray(grid.upper)
     tol = 1e-9 * grid.cell_size
     if np.any(lower < g_lo - tol) or np.any(upper > g_hi + tol):
-        raise ScenarioError(f"{key}: the body [{list(lower)}, {list(upper)}] m leaves the grid "
-                            f"[{list(g_lo)}, {list(g_hi)}] m")
+        raise ScenarioError(f"{key}: the body [{np.asarray(lower).tolist()}, {np.asarray(upper).tolist()}] m leaves "
+                            f"the grid [{g_lo.tolist()}, {g_hi.tolist()}] m")
     small = (upper - lower) < grid.cell_size * (1.0 - 1e-9)
     if np.any(small):
         ax = AXES[int(np.argmax(small))]
