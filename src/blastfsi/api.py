@@ -69,13 +69,15 @@ def load(scenario: str | Path | dict, set: dict | None = None) -> dict:
 def run(scenario: str | Path | dict, *, set: dict | None = None, out: str | Path | None = None,
         progress: bool = False, overwrite: bool = False) -> Result:
     """Run a scenario (see :func:`load`). ``out``: results directory to write
-    (None: nothing written); a non-empty one is refused unless ``overwrite``."""
+    (None: nothing written); a non-empty one is refused unless ``overwrite`` and it
+    is a results directory (the earlier run's outputs are then removed). Ctrl-C
+    stops a run with ``out`` cleanly (:class:`blastfsi.simulation.RunInterrupted`)."""
     return simulation.run(load(scenario, set), None if out is None else Path(out), overwrite=overwrite,
                           progress=progress)
 
 
 def restart(out: str | Path, *, progress: bool = False) -> Result:
-    """Continue the run in results directory ``out`` from its latest checkpoint."""
+    """Continue the run in results directory ``out`` from its latest readable checkpoint."""
     out = Path(out)
     if not (out / "scenario.toml").is_file():
         raise OutputError(f"restart: {out} holds no scenario.toml")

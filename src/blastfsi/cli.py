@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 from pathlib import Path
 
@@ -11,13 +12,13 @@ from blastfsi.api import example_data, example_names
 from blastfsi.io.results import OutputError
 from blastfsi.scenario import ScenarioError, apply_overrides, parse, read_toml
 
-EXIT_SCENARIO, EXIT_SIMULATION, EXIT_OUTPUT = 2, 3, 4
+EXIT_SCENARIO, EXIT_SIMULATION, EXIT_OUTPUT, EXIT_INTERRUPTED = 2, 3, 4, 130
 
 
 def _default_out(name: str) -> Path:
     base = Path("results") / name
     out, k = base, 1
-    while out.exists() and any(out.iterdir()):
+    while out.exists() and (not out.is_dir() or any(out.iterdir())):
         k += 1
         out = base.with_name(f"{base.name}-{k}")
     return out
@@ -35,7 +36,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scenario value by its dotted key, e.g. --set grid.cells=2000")
     r.add_argument("--json", action="store_true", help="print the summary as one JSON object on stdout")
-    r.add_argument("--overwrite", action="store_true", help="allow reusing a non-empty --out directory")
+    r.add_argument("--overwrite", action="store_true",
+                   help="replace the results of an earlier run in --out (a blastfsi results directory only)")
     sub.add_parser("examples", help="list the shipped examples")
     kb = sub.add_parser("kb", help="Kingery-Bulmash blast parameters of a TNT charge")
     kb.add_argument("--mass", type=float, required=True, metavar="KG", help="TNT mass [kg]")
@@ -86,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args) -> int:
-    from blastfsi.simulation import SimulationError
+    from blastfsi.simulation import RunInterrupted, SimulationError
 
     progress = sys.stderr.isatty() and not args.json
     try:
@@ -103,6 +105,12 @@ def _run(args) -> int:
     except SimulationError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_SIMULATION
+    except RunInterrupted as stop:
+        print(f"{stop}; continue with: blastfsi run --restart {shlex.quote(str(out))}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except KeyboardInterrupt:  # before the time loop, or a second Ctrl-C
+        print("interrupted at once: nothing more written", file=sys.stderr)
+        return EXIT_INTERRUPTED
     summary = res.summary
     if args.json:
         print(json.dumps(summary))

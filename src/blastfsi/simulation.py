@@ -8,8 +8,12 @@ of steps between the stop times of the output schedule: field snapshots,
 checkpoints (any NamedTuple state, saved and restored leaf by leaf under its
 field names: restart is bit for bit) and the end. Between chunks it updates
 the progress bar and turns a fault flag into an error naming the time, step,
-location and last checkpoint. At the end it writes histories, the summary and
-plots into the results directory. The summary times the run: ``compile_time``
+location and last checkpoint. It keeps the results directory current as the
+run goes (:class:`_Recorder`: history rows appended, summary and ParaView
+series rewritten at each output), so a run killed at any point leaves what it
+computed; Ctrl-C stops it cleanly between chunks (:class:`RunInterrupted`).
+At the end it writes the final summary and the plots. The summary (its
+``status``: running, complete, interrupted or failed) times the run: ``compile_time``
 (the time loop's compilation, a grown pool's included), ``wall_time`` (the rest
 of the time loop: ``loop_time``, the compiled loop's calls, plus
 ``output_time``, the snapshots and checkpoints written between them, with the
@@ -20,6 +24,9 @@ was enlarged and the time loop compiled again.
 from __future__ import annotations
 
 import re
+import signal
+import sys
+import threading
 import time as wallclock
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +43,11 @@ from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_MESSAGES, FAULT_NONE, FAU
 
 class SimulationError(RuntimeError):
     """A run stopped on a fault (non-physical state, collapsed time step) or an exhausted step budget."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) stopped a run that writes a results directory, after the compiled chunk it was in:
+    its checkpoint, history and summary (status "interrupted") are written; ``--restart`` continues it."""
 
 
 @dataclass
@@ -55,12 +67,7 @@ class Result:
     @property
     def summary(self) -> dict:
         """One member: its summary; an ensemble: each key maps to the list over members."""
-        if len(self.summaries) == 1:
-            return dict(self.summaries[0])
-        keys = dict.fromkeys(k for s in self.summaries for k in s)  # union, in order
-        out = {k: [s.get(k) for s in self.summaries] for k in keys}
-        out["members"] = self.members
-        return out
+        return _combined(self.summaries, self.members)
 
     @property
     def history(self) -> dict | list[dict]:
@@ -95,6 +102,14 @@ class Result:
 
     def _one_or_list(self, items: list):
         return items[0] if len(items) == 1 else items
+
+
+def _combined(summaries: list[dict], members: list[dict]) -> dict:
+    """One member: its summary; an ensemble: each key maps to the list over members, and ``members``."""
+    if len(summaries) == 1:
+        return dict(summaries[0])
+    keys = dict.fromkeys(k for s in summaries for k in s)  # union, in order
+    return {**{k: [s.get(k) for s in summaries] for k in keys}, "members": members}
 
 
 def _gauge_histories(hist: dict, position: np.ndarray) -> dict:
@@ -169,12 +184,8 @@ def _leaf_names(tree) -> list[tuple[str, object]]:
     return [(jax.tree_util.keystr(p).lstrip("."), leaf) for p, leaf in jax.tree_util.tree_flatten_with_path(tree)[0]]
 
 
-def _restore(file: Path, fresh, fit=None):
-    """The state saved in checkpoint ``file``, checked against the freshly built one (first passed, with
-    the saved leaves, through ``fit``, which may enlarge its particle pool to the saved one's)."""
-    saved, _ = results.read_checkpoint(file)
-    if fit is not None:
-        fresh = fit(saved, fresh)
+def _restore(file: Path, saved: dict, fresh):
+    """The state of the leaves ``saved`` in checkpoint ``file``, checked against the freshly built one."""
     names = _leaf_names(fresh)
     if sorted(saved) != sorted(n for n, _ in names):
         raise results.OutputError(f"{file}: checkpoint fields {sorted(saved)} do not match this scenario's state "
@@ -224,8 +235,9 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
         restart: bool = False, chunk_steps: int = 20_000) -> Result:
     """Run a scenario given as a raw dict (or a list of them, see
     :func:`blastfsi.scenario.expand`) as one batched computation. With
-    ``restart``, ``out`` is an existing results directory whose latest
-    checkpoint is continued; ``out=None`` writes nothing."""
+    ``restart``, ``out`` is an existing results directory whose latest readable
+    checkpoint is continued; ``out=None`` writes nothing. Ctrl-C while writing
+    ``out`` raises :class:`RunInterrupted` once the run is saved."""
     sc, members, member_scs = expand(data)
     method = methods.get(sc.method)
     setups = [method.build(s) for s in member_scs]
@@ -244,108 +256,138 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
 
     last_ckpt = None
     if restart:
-        last_ckpt = results.latest_checkpoint(out)
-        if last_ckpt is None:
-            raise results.OutputError(f"--restart: no checkpoint in {out / 'checkpoints'}")
-
-        def fit(saved, fresh):
-            nonlocal setups
-            setups, fresh = fit_pool(method, setups, saved, fresh)
-            return fresh
-
-        state = _restore(last_ckpt, state, fit)
+        last_ckpt, setups, state = _restored(out, method, setups, state)
         static = method.static(setups[0], member_scs[0])
     elif out is not None:
         results.prepare_directory(out, overwrite)
         results.write_scenario(out, sc)
     t_start = float(np.min(np.asarray(state.t)))
-    snapshots = [(i, t) for i, t in enumerate(field_times) if t <= t_start] if restart else []
+    rec = _Recorder(out, method, method.history_columns(setups[0], sc), state, last_ckpt,
+                    [(i, t) for i, t in enumerate(field_times) if t <= t_start] if restart else [])
     scalars = (chunk_steps, sample_interval, sc.time.dt_min_fraction)
-    advance, compile_time = compiled_advance(method, static, state, params, stops[-1], *scalars)
+    with _CtrlC(enabled=out is not None) as ctrl_c:  # (from the compilation on: Ctrl-C while compiling
+        #                                               stops before the first chunk)
+        advance, compile_time = compiled_advance(method, static, state, params, stops[-1], *scalars)
 
-    bar = _Progress(sc.time.end, enabled=progress)
-    started, grow_compile, growths = wallclock.perf_counter(), 0.0, 0
-    spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots and checkpoints
+        bar = _Progress(sc.time.end, enabled=progress)
+        started, grow_compile, growths = wallclock.perf_counter(), 0.0, 0
+        spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots, checkpoints, history, summary
 
-    def timed(part, fn, *args):
-        t0 = wallclock.perf_counter()
-        value = fn(*args)
-        spent[part] += wallclock.perf_counter() - t0
-        return value
+        def timed(part, fn, *args):
+            t0 = wallclock.perf_counter()
+            value = fn(*args)
+            spent[part] += wallclock.perf_counter() - t0
+            return value
 
-    def advanced(state, t_stop):  # the time loop's call, waited for
-        return jax.block_until_ready(advance(state, params, t_stop, *scalars))
+        def advanced(state, t_stop):  # the time loop's call, waited for
+            return jax.block_until_ready(advance(state, params, t_stop, *scalars))
 
-    def snapshot(index, t, state):
-        results.write_snapshot(out, index, t, [method.snapshot(s, u) for s, u in zip(_members(state), setups)])
-        snapshots.append((index, t))
+        def summary(host, status: str) -> list[dict]:  # of each member (host: the batched state on the host)
+            timing = {"wall_time": wallclock.perf_counter() - started - grow_compile,  # (the time loop only)
+                      "compile_time": compile_time, "loop_time": spent["loop"], "output_time": spent["output"],
+                      **({"pool_growths": growths} if hasattr(method, "grow") else {})}
+            return _summaries(method, sc, member_scs, setups, host, status, timing)
 
-    try:
-        if out is not None and not restart and field_times and field_times[0] == 0.0:
-            timed("output", snapshot, 0, 0.0, state)
-        for t_stop in (t for t in stops if t > t_start):
-            while np.any(np.asarray(state.t) < t_stop):
-                state = timed("loop", advanced, state, t_stop)
-                grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
-                if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
-                    setups, state = grown
-                    bar.note(f"t = {float(np.min(np.asarray(state.t))):.4e} s: particle pool full, grown to "
-                             f"{_pool_size(method, state)} slots (time loop compiled again)")
-                    static = method.static(setups[0], member_scs[0])
-                    advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
-                    compile_time += more
-                    grow_compile += more
-                    growths += 1
-                    continue
-                faulted = out is not None and np.any(np.asarray(state.fault) != FAULT_NONE)
-                # a fault keeps the history up to it, as it keeps the snapshots and checkpoints
-                kept = _write_histories(out, *_histories(method, setups, sc, state)) if faulted else []
-                _check(state, method, setups, sc, last_ckpt, kept)
-                bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
-                           float(np.min(np.asarray(state.dt_prev))))
-            if out is None:
-                continue
+        def outputs(t_stop, host):  # the schedule's at t_stop
             if t_stop in field_times:
-                timed("output", snapshot, field_times.index(t_stop), t_stop, state)
+                timed("output", rec.snapshot, field_times.index(t_stop), t_stop, host, setups)
             if t_stop in ckpt_times:
-                leaves = {n: np.asarray(leaf) for n, leaf in _leaf_names(state)}
-                last_ckpt = timed("output", results.write_checkpoint, out, ckpt_times.index(t_stop) + 1, leaves,
-                                  {"time": t_stop, "method": sc.method})
-    finally:
-        bar.close()
-    wall = wallclock.perf_counter() - started - grow_compile  # (the time loop only)
+                timed("output", rec.checkpoint, ckpt_times.index(t_stop) + 1, t_stop, host)
 
-    finals = _members(state)
-    columns, histories = _histories(method, setups, sc, state)
-    summaries = [{"method": sc.method, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
-                  "wall_time": wall, "compile_time": compile_time,
-                  "loop_time": spent["loop"], "output_time": spent["output"],
-                  **({"pool_growths": growths} if hasattr(method, "grow") else {}),
-                  **method.summary(msc, setup, hist, s)}
-                 for s, setup, msc, hist in zip(finals, setups, member_scs, histories)]
-    result = Result(sc, members, setups, summaries, histories, state, out, method, sorted(snapshots))
-    if out is not None:
-        _write_outputs(out, result, columns, finals)
+        try:
+            if out is not None and not restart and field_times and field_times[0] == 0.0:
+                outputs(0.0, jax.device_get(state))
+            for t_stop in (t for t in stops if t > t_start):
+                while not ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
+                    state = timed("loop", advanced, state, t_stop)
+                    grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
+                    if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
+                        setups, state = grown
+                        bar.note(f"t = {float(np.min(np.asarray(state.t))):.4e} s: particle pool full, grown to "
+                                 f"{_pool_size(method, state)} slots (time loop compiled again)")
+                        static = method.static(setups[0], member_scs[0])
+                        advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
+                        compile_time += more
+                        grow_compile += more
+                        growths += 1
+                        continue
+                    stop = _stop_reason(state, method, setups, sc)
+                    if stop is not None:  # (the history up to it is kept, as are the snapshots and checkpoints)
+                        raise SimulationError(f"{stop}; {rec.failed(jax.device_get(state), stop)}")
+                    bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
+                               float(np.min(np.asarray(state.dt_prev))))
+                if ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
+                    break
+                if out is None:
+                    continue
+                host = jax.device_get(state)
+                outputs(t_stop, host)
+                if ctrl_c.pressed:
+                    break
+                if t_stop < stops[-1]:
+                    timed("output", rec.update, host, setups, _combined(summary(host, "running"), members))
+        finally:
+            bar.close()
+
+        host = jax.device_get(state)
+        t_now = float(np.min(host.t))
+        interrupted = ctrl_c.pressed and t_now < stops[-1]
+        summaries = summary(host, "interrupted" if interrupted else "complete")
+        result = Result(sc, members, setups, summaries, _histories(method, setups, sc, host), state, out, method,
+                        sorted(rec.snapshots))
+        if out is not None:
+            if interrupted and rec.ckpt_time != t_now:
+                rec.checkpoint(sum(t <= t_now for t in ckpt_times), t_now, host, "_interrupted")
+            rec.update(host, setups, result.summary)
+            if sc.output.plots and not interrupted:
+                method.plots(out / "plots", sc, setups, result.histories, members,
+                             [method.snapshot(f, u) for f, u in zip(_members(host), setups)])
+    if interrupted:
+        raise RunInterrupted(f"interrupted at t = {t_now:.9g} s (step {int(np.max(host.step))}); "
+                             f"checkpoint {rec.last_ckpt}")
     return result
 
 
-def _histories(method: methods.Method, setups: list, sc: ScenarioBase, state) -> tuple[list, list[dict]]:
-    """The history columns and each member's recorded history."""
+def _restored(out: Path, method: methods.Method, setups: list, fresh) -> tuple[Path, list, object]:
+    """(checkpoint, setups, state) of the newest readable checkpoint in ``out`` (saying on stderr which
+    newer ones it skipped), checked against the freshly built state (its particle pool enlarged to the saved
+    one's, as the setups)."""
+    file, saved, skipped = results.read_latest_checkpoint(out)
+    for reason in skipped:
+        _warn(f"--restart: unreadable checkpoint skipped: {reason}")
+    if skipped:
+        _warn(f"--restart: continuing from {file}, the newest readable checkpoint")
+    setups, fresh = fit_pool(method, setups, saved, fresh)
+    return file, setups, _restore(file, saved, fresh)
+
+
+def _warn(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr)
+
+
+def _summaries(method: methods.Method, sc: ScenarioBase, member_scs: list, setups: list, host, status: str,
+               timing: dict) -> list[dict]:
+    """Each member's summary: method, status, time, steps, cells, the driver's ``timing``, the method's own."""
+    histories = _histories(method, setups, sc, host)
+    return [{"method": sc.method, "status": status, "time": float(s.t), "steps": int(s.step), "cells": int(setup.cells),
+             **timing, **method.summary(msc, setup, hist, s)}
+            for s, setup, msc, hist in zip(_members(host), setups, member_scs, histories)]
+
+
+def _histories(method: methods.Method, setups: list, sc: ScenarioBase, state) -> list[dict]:
+    """Each member's recorded history, column name -> samples."""
     columns = method.history_columns(setups[0], sc)
-    return columns, [_history_dict(s.hist, columns) for s in _members(state)]
+    return [{name: rows[:, i] for i, (name, _) in enumerate(columns)}
+            for rows in map(_recorded, np.asarray(state.hist))]
 
 
-def _history_dict(rows: np.ndarray, columns) -> dict:
-    rows = rows[np.isfinite(rows[:, 0])]  # samples never reached (a fault) stay unrecorded
-    return {name: rows[:, i] for i, (name, _) in enumerate(columns)}
+def _recorded(rows: np.ndarray) -> np.ndarray:
+    """The history rows a member has recorded (samples not reached, e.g. after a fault, are NaN)."""
+    return rows[np.isfinite(rows[:, 0])]
 
 
-def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_ckpt, kept=()) -> None:
-    """Raise SimulationError on a fault (naming ``kept``, the histories written up to it) or when the step
-    budget is spent."""
-    where = f"last checkpoint: {last_ckpt}" if last_ckpt else "no checkpoint written yet"
-    if kept:
-        where = f"history to the fault: {', '.join(map(str, kept))}; {where}"
+def _stop_reason(state, method: methods.Method, setups: list, sc: ScenarioBase) -> str | None:
+    """Why the run cannot go on, or None: a fault (its time, step and location) or the spent step budget."""
     fault = np.asarray(state.fault)
     if np.any(fault != FAULT_NONE):
         k = int(np.argmax(fault != FAULT_NONE))
@@ -356,31 +398,92 @@ def _check(state, method: methods.Method, setups: list, sc: ScenarioBase, last_c
                     f"{float(member.dt0):.3g} s)")
         else:
             what = FAULT_MESSAGES[int(fault[k])]
-        raise SimulationError(f"{what} in member {k} at t = {float(member.t):.9g} s, step {int(member.step)}: "
-                              f"{location}; {where}")
+        return f"{what} in member {k} at t = {float(member.t):.9g} s, step {int(member.step)}: {location}"
     if np.any(np.asarray(state.step) >= sc.time.max_steps):
-        raise SimulationError(f"time.max_steps = {sc.time.max_steps} reached at t = {float(np.min(state.t)):.6g} s "
-                              f"(end {sc.time.end} s); raise time.max_steps or coarsen the grid; {where}")
+        return (f"time.max_steps = {sc.time.max_steps} reached at t = {float(np.min(state.t)):.6g} s "
+                f"(end {sc.time.end} s); raise time.max_steps or coarsen the grid")
+    return None
 
 
-def _write_histories(out: Path, columns, histories: list[dict]) -> list[Path]:
-    """history.csv (one member) or history_member<k>.csv per member; returns the paths."""
-    many = len(histories) > 1
-    paths = [out / (f"history_member{k}.csv" if many else "history.csv") for k in range(len(histories))]
-    for path, hist in zip(paths, histories):
-        results.write_history(path, columns, np.stack([hist[n] for n, _ in columns], axis=1))
-    return paths
+class _Recorder:
+    """The results directory ``out`` kept current as the run goes: the snapshots and checkpoints of the
+    output schedule and, at each output (:meth:`update`), the history rows recorded since the last
+    (appended), the snapshots' ParaView series and the summary, so a run killed at any point leaves what it
+    computed. The history files start with the rows of the state it is made with (a restart's, from its
+    checkpoint: any later rows of the run that wrote them are dropped). With ``out`` None (a run that
+    writes nothing) it makes no file and the driver calls none of its writers."""
+
+    def __init__(self, out: Path | None, method: methods.Method, columns, state, last_ckpt: Path | None,
+                 snapshots: list[tuple[int, float]]):
+        self.out, self.method, self.last_ckpt, self.snapshots = out, method, last_ckpt, snapshots
+        self.ckpt_time = float(np.min(np.asarray(state.t))) if last_ckpt else None
+        self.templates = None  # the last snapshot of each member written (field names and sizes for the series)
+        self.summary = {"method": method.name}  # the last written
+        rows = [_recorded(h) for h in np.asarray(state.hist)] if out is not None else []
+        self.histories = [out / (f"history_member{k}.csv" if len(rows) > 1 else "history.csv")
+                          for k in range(len(rows))]
+        for file, member_rows in zip(self.histories, rows):
+            results.write_history(file, columns, member_rows)
+        self.written = [len(r) for r in rows]
+
+    def snapshot(self, index: int, t: float, host, setups: list) -> None:
+        self.templates = [self.method.snapshot(s, u) for s, u in zip(_members(host), setups)]
+        results.write_snapshot(self.out, index, t, self.templates)
+        self.snapshots.append((index, t))
+
+    def checkpoint(self, index: int, t: float, host, suffix: str = "") -> None:
+        leaves = {n: np.asarray(leaf) for n, leaf in _leaf_names(host)}
+        self.last_ckpt = results.write_checkpoint(self.out, index, leaves, {"time": t, "method": self.method.name},
+                                                  suffix)
+        self.ckpt_time = t
+
+    def update(self, host, setups: list, summary: dict) -> None:
+        """Append the new history rows, rewrite the series and the summary."""
+        self._append_history(host)
+        if self.snapshots:
+            templates = self.templates or [self.method.snapshot(s, u) for s, u in zip(_members(host), setups)]
+            for k, template in enumerate(templates):
+                results.write_series(self.out, k, sorted(self.snapshots), template)
+        self.summary = summary
+        results.write_summary(self.out, summary)
+
+    def failed(self, host, reason: str) -> str:
+        """The history up to a fault, and the last summary marked failed; returns what is kept, for the error."""
+        where = f"last checkpoint: {self.last_ckpt}" if self.last_ckpt else "no checkpoint written yet"
+        if self.out is None:
+            return where
+        self._append_history(host)
+        results.write_summary(self.out, {**self.summary, "status": "failed", "error": reason})
+        return f"history to the fault: {', '.join(map(str, self.histories))}; {where}"
+
+    def _append_history(self, host) -> None:
+        for k, (file, hist) in enumerate(zip(self.histories, np.asarray(host.hist))):
+            rows = _recorded(hist)
+            results.append_history(file, rows[self.written[k]:])
+            self.written[k] = len(rows)
 
 
-def _write_outputs(out: Path, res: Result, columns, finals: list) -> None:
-    _write_histories(out, columns, res.histories)
-    if res.snapshots:
-        for k in range(len(res.setups)):
-            results.write_series(out, k, res.snapshots, res.method.snapshot(finals[k], res.setups[k]))
-    results.write_summary(out, res.summary)
-    if res.scenario.output.plots:
-        res.method.plots(out / "plots", res.scenario, res.setups, res.histories, res.members,
-                         [res.method.snapshot(f, u) for f, u in zip(finals, res.setups)])
+class _CtrlC:
+    """Ctrl-C (SIGINT) during a run that writes a results directory: noted (``pressed``) for the driver to
+    stop after the compiled chunk in progress (a compiled call cannot be stopped midway); a second Ctrl-C
+    interrupts at once, as usual. Only in the main thread (where Python delivers signals)."""
+
+    def __init__(self, enabled: bool):
+        self.pressed = False
+        self._enabled = enabled and threading.current_thread() is threading.main_thread()
+
+    def __enter__(self):
+        if self._enabled:
+            self._previous = signal.signal(signal.SIGINT, self._note)
+        return self
+
+    def _note(self, signum, frame) -> None:
+        self.pressed = True
+        signal.signal(signal.SIGINT, self._previous)
+
+    def __exit__(self, *exc) -> None:
+        if self._enabled:
+            signal.signal(signal.SIGINT, self._previous)
 
 
 class _Progress:

@@ -23,7 +23,8 @@ Conventions, all checked by ``tests/test_io_fields.py`` with ``vtkXdmfReader``:
   components rather than 6-component Voigt because XDMF ``Tensor6`` (xx, xy, xz, yy, yz, zz) and VTK's
   symmetric order (xx, yy, zz, xy, yz, xz) disagree; 9 components are read the same way everywhere.
 - Particles are an XDMF ``Polyvertex`` topology with node-centred data; coordinates are padded to 3 with
-  zeros. A snapshot needs at least one particle: ``vtkXdmfReader`` fails on an empty geometry.
+  zeros. A snapshot needs at least one particle: ``vtkXdmfReader`` fails on an empty geometry (a coupled
+  snapshot's particles may be none: that time step then shows the grid alone).
 - Grid + particles (a coupled Eulerian-MPM run): ONE HDF5 file per snapshot with a group ``grid`` laid out
   as a grid file and a group ``particles`` laid out as a particle file (one file, so a snapshot is written
   or missing as a whole), and one temporal collection whose every step is a ``Spatial`` collection of the
@@ -320,8 +321,9 @@ def write_grid_series(xdmf_path, snapshots: Sequence[tuple[str, float]], shape: 
 
 # -------------------------------------------------------------------------------------------- particles
 def _write_particles(group: h5py.Group, time, positions, fields: Mapping[str, np.ndarray], active,
-                     precision: int) -> dict[str, str]:
-    """The particle datasets and attributes of :func:`write_particle_snapshot` into an open HDF5 group."""
+                     precision: int, allow_empty: bool = False) -> dict[str, str]:
+    """The particle datasets and attributes of :func:`write_particle_snapshot` into an open HDF5 group
+    (with ``allow_empty``, also of no particle)."""
     dtype = _dtype(precision)
     positions = np.asarray(positions)
     if positions.ndim != 2 or not 1 <= positions.shape[1] <= 3:
@@ -331,7 +333,7 @@ def _write_particles(group: h5py.Group, time, positions, fields: Mapping[str, np
     if keep.shape != (n,) or keep.dtype != bool:
         raise ValueError(f"active must be a boolean array of shape ({n},), got {keep.dtype} {keep.shape}")
     count = int(keep.sum())
-    if count == 0:
+    if count == 0 and not allow_empty:
         raise ValueError("a particle snapshot needs at least one (active) particle; ParaView's XDMF readers fail "
                          "on an empty geometry, so skip this snapshot")
     _check_names(fields, reserved=(COORDINATES,))
@@ -398,7 +400,8 @@ def write_coupled_snapshot(h5_path, time, origin, spacing, grid_fields: Mapping[
                            precision: int = 8) -> tuple[dict[str, str], dict[str, str]]:
     """Write a uniform grid and a particle cloud of the same dimension to one HDF5 file: the group
     :data:`GRID_GROUP` as :func:`write_grid_snapshot` writes a file, the group :data:`PARTICLES_GROUP` as
-    :func:`write_particle_snapshot` does (arguments as there), and the attribute ``time`` at the root.
+    :func:`write_particle_snapshot` does (arguments as there, but the particles may be none: an MPM box
+    whose gas has all left), and the attribute ``time`` at the root.
     Returns the ``{name: kind}`` of the grid fields and of the particle fields for :func:`write_coupled_series`.
     """
     ndim, particle_ndim = np.atleast_1d(origin).size, np.shape(positions)[-1]
@@ -408,7 +411,7 @@ def write_coupled_snapshot(h5_path, time, origin, spacing, grid_fields: Mapping[
         f.attrs["time"] = _time(time)
         grid_kinds = _write_grid(f.create_group(GRID_GROUP), time, origin, spacing, grid_fields, precision)
         particle_kinds = _write_particles(f.create_group(PARTICLES_GROUP), time, positions, particle_fields, active,
-                                          precision)
+                                          precision, allow_empty=True)
     return grid_kinds, particle_kinds
 
 
@@ -424,8 +427,9 @@ def write_coupled_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]],
                          precision: int = 8) -> None:
     """XDMF temporal collection over files of :func:`write_coupled_snapshot`, each time step a Spatial collection
     of the grid (named "grid", as in :func:`write_grid_series`) and the particles (named "particles", as in
-    :func:`write_particle_series`). ``snapshots`` = [(h5 file relative to the XDMF, time, number of particles
-    in it)]; ``shape``, ``origin``, ``spacing`` describe the grid; the kinds are what the snapshot writer returns.
+    :func:`write_particle_series`; left out of a step with no particle). ``snapshots`` = [(h5 file relative to
+    the XDMF, time, number of particles in it)]; ``shape``, ``origin``, ``spacing`` describe the grid; the kinds
+    are what the snapshot writer returns.
     """
     layout = _grid_layout(shape, origin, spacing)
     _dtype(precision)
@@ -435,8 +439,8 @@ def write_coupled_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]],
     steps = []
     for index, (h5_name, time, count) in enumerate(snapshots):
         grid = _uniform(GRID_GROUP, _grid_body(_h5_location(h5_name, GRID_GROUP), layout, grid_kinds, precision))
-        cloud = _uniform(PARTICLES_GROUP, _particle_body(_h5_location(h5_name, PARTICLES_GROUP),
-                                                         _particle_count(h5_name, count), particle_kinds, precision))
+        cloud = "" if count == 0 else _uniform(PARTICLES_GROUP, _particle_body(
+            _h5_location(h5_name, PARTICLES_GROUP), _particle_count(h5_name, count), particle_kinds, precision))
         steps.append(f'<Grid Name="step{index}" GridType="Collection" CollectionType="Spatial">'
                      f'{_time_element(time)}{grid}{cloud}</Grid>')
     _write_collection(xdmf_path, steps)

@@ -2,9 +2,10 @@
 
 Layout::
 
+    .blastfsi                  marker: a results directory (what --overwrite may empty)
     scenario.toml              the resolved scenario (defaults filled in)
-    summary.json               the run's summary quantities
-    history.csv                (history_member<k>.csv for ensembles) SI units in the header
+    summary.json               the run's summary quantities (rewritten at each output, key status)
+    history.csv                (history_member<k>.csv for ensembles) SI units in the header; appended as the run goes
     fields/                    field snapshots, one FieldWriter per snapshot kind; open member<k>.xdmf
                                in ParaView (a time series). 1D meshes: snap_<i>.h5 (one group per member);
                                grids, particles, and grid + particles in one file (coupled; groups grid,
@@ -17,6 +18,7 @@ from __future__ import annotations
 import csv
 import json
 import re
+import shutil
 from pathlib import Path
 from typing import Protocol
 
@@ -32,18 +34,40 @@ class OutputError(RuntimeError):
     pass
 
 
+MARKER = ".blastfsi"  # the file that makes a directory a results directory
+RUN_OUTPUTS = ("scenario.toml", "summary.json", "summary.json.tmp", "history*.csv", "fields", "checkpoints", "plots")
+#              (glob patterns: everything a run writes besides the marker, removed by --overwrite)
+
+
 def prepare_directory(path: Path, overwrite: bool) -> Path:
-    """Create a fresh results directory; never reuse a non-empty one silently."""
-    if path.exists() and any(path.iterdir()):
-        if not overwrite:
-            raise OutputError(f"results directory {path} exists and is not empty; choose another --out, "
-                              "pass --overwrite, or continue it with --restart")
+    """Create a fresh results directory, marked as one; never reuse a non-empty one silently: with
+    ``overwrite``, only a results directory (its MARKER), whose earlier run's outputs are then removed."""
+    try:
+        if path.exists() and not path.is_dir():
+            raise OutputError(f"results directory {path} is a file; choose another --out")
+        if path.exists() and any(path.iterdir()):
+            if not overwrite:
+                raise OutputError(f"results directory {path} exists and is not empty; choose another --out, "
+                                  "pass --overwrite, or continue it with --restart")
+            if not (path / MARKER).is_file():
+                raise OutputError(f"--overwrite refused: {path} is not a blastfsi results directory (it has no "
+                                  f"{MARKER} marker); nothing in it was touched, choose another --out")
+            _remove_outputs(path)
         for sub in ("fields", "checkpoints", "plots"):
-            for f in (path / sub).glob("*"):
-                f.unlink()
-    for sub in ("fields", "checkpoints", "plots"):
-        (path / sub).mkdir(parents=True, exist_ok=True)
+            (path / sub).mkdir(parents=True, exist_ok=True)
+        (path / MARKER).write_text("blastfsi results directory\n")
+    except OSError as err:
+        raise OutputError(f"results directory {path} cannot be created or emptied: {err.strerror or err}") from None
     return path
+
+
+def _remove_outputs(path: Path) -> None:
+    for pattern in RUN_OUTPUTS:
+        for p in path.glob(pattern):
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p)
+            else:
+                p.unlink()
 
 
 def write_scenario(path: Path, scenario) -> None:
@@ -51,15 +75,22 @@ def write_scenario(path: Path, scenario) -> None:
 
 
 def write_summary(path: Path, summary: dict) -> None:
-    (path / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    """Write atomically: a run killed while writing leaves the previous summary."""
+    tmp = path / "summary.json.tmp"
+    tmp.write_text(json.dumps(summary, indent=2) + "\n")
+    tmp.replace(path / "summary.json")
 
 
 def write_history(file: Path, columns, rows: np.ndarray) -> None:
+    """The header and ``rows`` (replacing the file); :func:`append_history` adds rows as the run goes."""
     with open(file, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow([f"{name} [{unit}]" for name, unit in columns])
-        for r in rows:
-            w.writerow([repr(float(v)) for v in r])
+        csv.writer(fh).writerow([f"{name} [{unit}]" for name, unit in columns])
+    append_history(file, rows)
+
+
+def append_history(file: Path, rows: np.ndarray) -> None:
+    with open(file, "a", newline="") as fh:  # (closed, so flushed: a run killed later keeps them)
+        csv.writer(fh).writerows([repr(float(v)) for v in r] for r in rows)
 
 
 def read_history(file: Path) -> dict:
@@ -272,9 +303,11 @@ def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node
     (path / "fields" / f"member{member}.xdmf").write_text(text)
 
 
-def write_checkpoint(path: Path, index: int, leaves: dict, meta: dict) -> Path:
-    """Write atomically (temporary file, then rename) so a crash never leaves a half checkpoint."""
-    file = path / "checkpoints" / f"ckpt_{index:04d}.h5"
+def write_checkpoint(path: Path, index: int, leaves: dict, meta: dict, suffix: str = "") -> Path:
+    """Write ``checkpoints/ckpt_<index><suffix>.h5`` atomically (temporary file, then rename) so a crash never
+    leaves a half checkpoint. (An interruption's checkpoint after scheduled one <index> has a suffix that sorts
+    it between that one and the next.)"""
+    file = path / "checkpoints" / f"ckpt_{index:04d}{suffix}.h5"
     tmp = file.with_suffix(".tmp")
     with h5py.File(tmp, "w") as f:
         for k, v in meta.items():
@@ -285,9 +318,21 @@ def write_checkpoint(path: Path, index: int, leaves: dict, meta: dict) -> Path:
     return file
 
 
-def latest_checkpoint(path: Path) -> Path | None:
-    files = sorted((path / "checkpoints").glob("ckpt_*.h5"))
-    return files[-1] if files else None
+def read_latest_checkpoint(path: Path) -> tuple[Path, dict, list[str]]:
+    """(file, leaves, skipped) of the newest checkpoint in ``path`` that reads back whole; ``skipped`` says
+    why each newer one does not (truncated, empty, not HDF5, a directory). OutputError naming them all when
+    none does."""
+    files = sorted((path / "checkpoints").glob("ckpt_*.h5"), reverse=True)
+    if not files:
+        raise OutputError(f"--restart: no checkpoint in {path / 'checkpoints'}")
+    skipped = []
+    for file in files:
+        try:
+            return file, read_checkpoint(file)[0], skipped
+        except (OSError, KeyError) as err:  # (h5py: OSError for a file it cannot open or read)
+            skipped.append(f"{file}: a directory" if file.is_dir()
+                           else f"{file} ({file.stat().st_size} bytes): {str(err).splitlines()[0]}")
+    raise OutputError(f"--restart: no readable checkpoint in {path / 'checkpoints'}: {'; '.join(skipped)}")
 
 
 def read_checkpoint(file: Path) -> tuple[dict, dict]:
