@@ -24,7 +24,7 @@ from blastfsi import euler as ek
 from blastfsi import mpm, timeloop
 from blastfsi.cfdmp import coupling as cp
 from blastfsi.cfdmp.scenario import CfdmpScenario
-from blastfsi.diagnostics import blast_maps
+from blastfsi.diagnostics import blast_maps, damage
 from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
 from blastfsi.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
@@ -401,7 +401,9 @@ class Cfdmp:
     def snapshot(self, state: State, setup: problem.Setup) -> Coupled:
         """The viewed grid (Eulerian cells, and the box cells beyond the bridges from the particles; cells
         without gas, inside structures, are NaN; ``region`` 0 Eulerian, 1 bridge, 2 particles) and the
-        particles (gas and structures: pressure, stress, plastic strain, damage)."""
+        particles (gas and structures: pressure, stress, plastic strain, damage, the models' own fields such as
+        HJC's compressive and tensile damage; the structures' displacement from their reference position, NaN
+        for gas)."""
         cs = self._static(setup, 0).coupling
         prm = self.params(setup, np.asarray(state.U).dtype)
         prim, empty, duration = jax.device_get(_viewed_primitives(state, prm, cs))
@@ -433,6 +435,12 @@ class Cfdmp:
                   "plastic_strain": np.asarray(P.point.plastic_strain)[on], "damage": np.asarray(P.point.damage)[on],
                   "material": np.asarray(P.material)[on].astype(float),
                   "structure": (np.arange(on.size) < nst)[on].astype(float)}
+        displacement = np.full((on.size, g.ndim), np.nan)  # of the structures' particles from their reference
+        if nst:
+            displacement[:nst] = np.asarray(P.x)[:nst, :g.ndim] - np.asarray(setup.structures.x)[:, :g.ndim]
+        points["displacement"] = displacement[on]
+        points.update({k: v.astype(float) for k, v in mpm.model_output_fields(
+            np.asarray(P.material)[on], np.asarray(P.point.history)[on], setup.models, setup.model_params).items()})
         return Coupled(grid=Grid(edges=edges, cell_fields=fields),
                        particles=Particles(positions=np.asarray(P.x)[on, :g.ndim], point_fields=points))
 
@@ -547,7 +555,11 @@ class Cfdmp:
                 "damaged_fraction": float(vol[damaged].sum() / vol.sum()) if on.any() else None,
                 "damaged_extent": ([[float(v) for v in x[damaged].min(axis=0)], [float(v) for v in x[damaged].max(axis=0)]]
                                    if damaged.any() else None),
-                "mass_left_the_box": float(state.budget.structure_out)}
+                "mass_left_the_box": float(state.budget.structure_out),
+                "failed_volume": float(vol[dmg >= 1.0].sum())}
+            faces = _loaded_faces(sc, setup, state)
+            if faces:
+                out["structures"]["faces"] = faces
         return out
 
     def plots(self, folder: Path, sc: CfdmpScenario, setups: list, histories: list[dict], members: list[dict],
@@ -595,6 +607,62 @@ class Cfdmp:
 
 
 METHOD = register(Cfdmp())
+
+
+BACK_FACE_THRESHOLDS = (0.5, 0.75, 0.99)  # of the tensile damage D_t (concrete-25mpa spalls at 0.99)
+
+
+def _loaded_faces(sc: CfdmpScenario, setup: problem.Setup, state: State) -> list[dict]:
+    """Per HJC structure under a charge, on its face toward the charge (normal to the last axis): the zone of
+    failed particles (damage 1, crushed or spalled: 000 Sec. 5.3's failure area) and of compressive failure
+    (HJC damage), and on the opposite face the tensile damage (diagnostics.damage); damaged areas mirrored
+    across symmetry planes through the charge's axis."""
+    if sc.initial.kind != "charge":
+        return []
+    nd, nst = setup.euler.grid.ndim, setup.info["structure_particles"]
+    axis = nd - 1
+    center = np.asarray(sc.initial.center, float)
+    P = state.mpm.particles
+    material = np.asarray(P.material)[:nst]
+    fields = mpm.model_output_fields(material, np.asarray(P.point.history)[:nst], setup.models, setup.model_params)
+    failed = np.asarray(P.point.damage)[:nst]
+    reference, volume0 = np.asarray(setup.structures.x)[:, :nd], np.asarray(setup.structures.volume0)
+    axisymmetric = sc.domain.geometry == "axisymmetric"
+    mirror = 1.0
+    for a in range(nd if axisymmetric else 0, nd - 1):
+        if getattr(sc.boundaries, AXES[a])[0] == "symmetry" and center[a] == sc.domain.lower[a]:
+            mirror *= 2.0
+    out = []
+    for b, body in enumerate(sc.structures):
+        mine = setup.body == b
+        if setup.models[material[mine][0]].name != "hjc":
+            continue
+        z = reference[mine, axis]
+        if center[axis] > z.max():
+            loaded, back = "upper", "lower"
+        elif center[axis] < z.min():
+            loaded, back = "lower", "upper"
+        else:
+            continue
+
+        def face(values, side, **kw):
+            return damage.damaged_face(reference[mine], volume0[mine], values[mine], normal_axis=axis, side=side,
+                                       spacing=setup.grid.cell_size / body.particles_per_cell,
+                                       rows=body.particles_per_cell, load_axis=center,
+                                       ring_width=setup.grid.cell_size, mirror=mirror,
+                                       planar=nd == 2 and not axisymmetric, **kw)
+
+        front = face(failed, loaded)
+        out.append({"structure": b, "loaded_face": f"{loaded} {AXES[axis]}",
+                    "crushing_diameter": next(r["diameter"] for r in front["by_threshold"] if r["threshold"] == 1.0),
+                    "crushing_diameter_definition": (
+                        "diameter of the zone around the charge's axis where at least half of the loaded face's area "
+                        "(one cell deep, reference configuration; rings one cell wide) failed (damage 1: crushed or "
+                        "spalled)"),
+                    "failed": front, "compressive_damage": face(fields["compressive_damage"], loaded),
+                    "back_face": f"{back} {AXES[axis]}",
+                    "back_face_tensile_damage": face(fields["tensile_damage"], back, thresholds=BACK_FACE_THRESHOLDS)})
+    return out
 
 
 

@@ -15,6 +15,8 @@ of one material (leading axis n), no branching on strings inside them.
 * ``params_from(material) -> Params``: the traced parameter NamedTuple from a
   library entry of :mod:`blastfsi.materials`.
 * ``history_size``: columns of ``ps.history`` the model uses.
+* ``output_fields(history, params) -> dict``: named per-particle quantities derived from the
+  history columns for the snapshots (host side, NumPy; e.g. a temperature, a damage split).
 """
 from __future__ import annotations
 
@@ -30,12 +32,17 @@ class PointState(NamedTuple):
     history: object  # (n, H) model-specific (temperature, tensile damage, burn fraction, ...)
 
 
+def no_output_fields(history, params) -> dict:
+    return {}
+
+
 class Model(NamedTuple):
     name: str
     update: Callable
     wave_speed: Callable
     params_from: Callable
     history_size: int
+    output_fields: Callable = no_output_fields
 
 
 MODELS: dict[str, Model] = {}

@@ -56,6 +56,7 @@ import numpy as np
 
 from blastfsi.constitutive import Model, PointState, register
 from blastfsi.constitutive import tensor as T
+from blastfsi.materials import ranges
 
 HISTORY_COLUMNS = ("mu_max", "plastic_volumetric_strain", "hjc_damage", "tensile_damage_exponent")
 
@@ -221,20 +222,10 @@ def locking_strain(K1: float, K2: float, K3: float, P_lock: float, mu_lock: floa
 
 def params_from(material) -> HJCParams:
     m = material
-    for key in ("density", "shear_modulus", "fc", "T", "P_crush", "mu_crush", "K1", "P_lock",
-                "reference_strain_rate", "tensile_threshold", "tensile_exponent", "EFMIN", "D1"):
-        if not getattr(m, key) > 0.0:
-            raise ValueError(f"{key} must be > 0, got {getattr(m, key)}")
-    if not m.tensile_damage_rate >= 0.0:
-        raise ValueError(f"tensile_damage_rate must be >= 0 1/s, got {m.tensile_damage_rate}")
-    if not 0.0 < m.initial_tensile_damage < m.tensile_damage_limit < 1.0:
-        raise ValueError("need 0 < initial_tensile_damage < tensile_damage_limit < 1, got "
-                         f"{m.initial_tensile_damage}, {m.tensile_damage_limit}")
+    ranges.check(m)  # every constant in its range and order (blastfsi.materials.solids.HJCConcrete)
     mu_plock = locking_strain(m.K1, m.K2, m.K3, m.P_lock, m.mu_lock)
     if not mu_plock > m.mu_crush:
         raise ValueError(f"mu_lock ({m.mu_lock}) puts the end of the crush line {mu_plock} below mu_crush")
-    if not m.P_lock > m.P_crush:
-        raise ValueError(f"P_lock must be > P_crush ({m.P_crush} Pa), got {m.P_lock}")
 
     def logit(x):
         return float(np.log(x / (1.0 - x)))
@@ -246,4 +237,12 @@ def params_from(material) -> HJCParams:
         logit(m.tensile_damage_limit) - logit(m.initial_tensile_damage))
 
 
-MODEL = register(Model("hjc", update, wave_speed, params_from, history_size=len(HISTORY_COLUMNS)))
+def output_fields(history, p: HJCParams) -> dict:
+    """The two damages apart: ``compressive_damage`` the HJC D of 000 Eq. (57) (crushing: 1 = crushed),
+    ``tensile_damage`` the Jiang D_t of 000 Eq. (58) (the particle spalls at ``tensile_damage_limit``)."""
+    return {"compressive_damage": np.asarray(history[:, 2]),
+            "tensile_damage": np.asarray(tensile_damage(np.asarray(history[:, 3]), p))}
+
+
+MODEL = register(Model("hjc", update, wave_speed, params_from, history_size=len(HISTORY_COLUMNS),
+                       output_fields=output_fields))

@@ -38,12 +38,14 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from blastfsi import xla
 from blastfsi.constitutive import Model, PointState, register
 from blastfsi.constitutive import tensor as T
 from blastfsi.eos import mie_gruneisen as mg
 from blastfsi.eos.mie_gruneisen import MieGruneisenParams
+from blastfsi.materials import ranges
 
 HISTORY_COLUMNS = ("temperature_rise",)
 MAX_ITERATIONS = 60
@@ -191,15 +193,7 @@ def wave_speed(ps: PointState, params: JohnsonCookParams):
 
 
 def params_from(material) -> JohnsonCookParams:
-    for key, lo in (("shear_modulus", 0.0), ("specific_heat", 0.0), ("density", 0.0),
-                    ("reference_strain_rate", 0.0), ("C0", 0.0)):
-        if not getattr(material, key) > lo:
-            raise ValueError(f"{key} must be > {lo}, got {getattr(material, key)}")
-    if not material.melt_temperature > material.room_temperature:
-        raise ValueError(f"melt_temperature must be > room_temperature ({material.room_temperature} K), "
-                         f"got {material.melt_temperature}")
-    if not 0.0 <= material.taylor_quinney <= 1.0:
-        raise ValueError(f"taylor_quinney must be in [0, 1], got {material.taylor_quinney}")
+    ranges.check(material)  # every constant in its range and order (blastfsi.materials.solids.JohnsonCookSolid)
     return JohnsonCookParams(
         material.shear_modulus, material.A, material.B, material.n, material.C, material.m,
         material.reference_strain_rate, material.room_temperature, material.melt_temperature,
@@ -207,4 +201,10 @@ def params_from(material) -> JohnsonCookParams:
         MieGruneisenParams(material.density, material.C0, material.S, material.gamma0, material.a))
 
 
-MODEL = register(Model("johnson-cook", update, wave_speed, params_from, history_size=len(HISTORY_COLUMNS)))
+def output_fields(history, p: JohnsonCookParams) -> dict:
+    """``temperature`` [K]: the room temperature plus the adiabatic rise of 000 Eq. (64)'s thermal term."""
+    return {"temperature": p.room_temperature + np.asarray(history[:, 0])}
+
+
+MODEL = register(Model("johnson-cook", update, wave_speed, params_from, history_size=len(HISTORY_COLUMNS),
+                       output_fields=output_fields))

@@ -4,7 +4,8 @@ from blastfsi.mpm.musl import (Config, MPMError, Params, State, check_particles,
                                make_config, make_params, materialised_stencil, stable_dt, step)
 from blastfsi.mpm.particles import (CapacityError, ParticleError, Particles, Totals, add_particles, add_particles_at,
                                     check_capacity,
-                                    compact, concatenate, empty, insert, lattice, make_pool, new_particles,
+                                    compact, concatenate, empty, insert, lattice, make_pool, model_output_fields,
+                                    new_particles,
                                     remove_particles, sort_by_cell, surface_load, total_energy, total_mass,
                                     total_momentum, totals)
 from blastfsi.mpm.shape import GIMP, LINEAR, SHAPES, Shape, stencil
@@ -15,7 +16,7 @@ __all__ = [
     "make_config", "make_params", "materialised_stencil", "stable_dt", "step",
     "CapacityError", "ParticleError", "Particles", "Totals", "add_particles", "add_particles_at", "check_capacity",
     "compact",
-    "concatenate", "empty", "insert", "lattice", "make_pool", "new_particles", "remove_particles", "sort_by_cell",
+    "concatenate", "empty", "insert", "lattice", "make_pool", "model_output_fields", "new_particles", "remove_particles", "sort_by_cell",
     "surface_load", "total_energy", "total_mass", "total_momentum", "totals",
     "GIMP", "LINEAR", "SHAPES", "Shape", "stencil",
 ]

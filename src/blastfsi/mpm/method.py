@@ -8,8 +8,9 @@ Snapshot (:class:`blastfsi.method.Particles`, active particles): ``density``,
 (n, 3, 3) (tension positive; 2D plane strain keeps sigma_zz, r-z keeps the hoop
 stress sigma_thth as the zz entry), ``plastic_strain``, ``damage`` (1: failed),
 ``internal_energy`` (J/kg), ``material`` (index into summary ``materials``),
-``body`` (index of the body, the impactor last) and, with a Johnson-Cook
-material, ``temperature`` (NaN for the other materials).
+``body`` (index of the body, the impactor last) and the models' own fields
+(``Model.output_fields``, NaN for the other materials): ``temperature`` (Johnson-Cook),
+``compressive_damage`` and ``tensile_damage`` (HJC).
 
 Histories: kinetic, internal (stress and q work, incl. plastic), plastic work
 and external work, the energy balance kinetic + internal - initial - external
@@ -190,13 +191,8 @@ class MPM:
                   "internal_energy": np.asarray(ps.energy)[on],
                   "material": np.asarray(P.material)[on],
                   "body": np.pad(setup.body, (0, on.size - setup.body.size), constant_values=-1)[on]}
-        jc = [k for k, m in enumerate(setup.models) if m.name == "johnson-cook"]
-        if jc:
-            material = fields["material"]
-            rise = np.asarray(ps.history)[on, 0]
-            room = np.array([getattr(setup.model_params[k], "room_temperature", np.nan) if k in jc else np.nan
-                             for k in range(len(setup.models))])
-            fields["temperature"] = np.where(np.isin(material, jc), room[material] + rise, np.nan)
+        fields.update(mpm.model_output_fields(fields["material"], np.asarray(ps.history)[on], setup.models,
+                                              setup.model_params))
         return Particles(positions=np.asarray(P.x)[on, :d], point_fields=fields)
 
     def locate_fault(self, state: State, setup: problem.Setup) -> str:

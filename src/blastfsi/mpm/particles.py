@@ -290,3 +290,16 @@ def total_energy(p: Particles):
     """Kinetic + internal energy of the active particles [J]."""
     t = totals(p)
     return t.kinetic + t.internal
+
+
+def model_output_fields(material: np.ndarray, history: np.ndarray, models, model_params) -> dict:
+    """The constitutive models' derived snapshot fields (``Model.output_fields``) over particles of
+    material indices ``material`` with history rows ``history``: NaN where a particle's model has no
+    such field; every model's fields are there, whether its particles are or not (one layout per series).
+    Host side."""
+    out = {}
+    for k, (model, params) in enumerate(zip(models, model_params)):
+        mine = material == k
+        for name, values in model.output_fields(history[mine], params).items():
+            out.setdefault(name, np.full(material.shape, np.nan))[mine] = values
+    return out
