@@ -195,7 +195,8 @@ class Euler:
             info = setup.info
             if info["kb_burst"] is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
                 r = kb_compare.distances(setup.gauges, info["charge_center"])
-                gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"])
+                refs = kb_compare.scenario_references(sc, info, float(setup.grid.dx))  # by position, or set
+                gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"], refs)
             out.update(charge_mass=info["charge_mass"], remap_time=t0, one_d_air_zone=info["one_d_air_zone"])
         out["gauges"] = gauges
         return out
@@ -210,12 +211,14 @@ class Euler:
             t0 = setups[0].info.get("remap_time", 0.0)
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges, t0)
             if sc.initial.kind == "charge" and setups[0].info["kb_burst"] is not None:
+                from blastfsi.detonation.kb_compare import scenario_references
                 from blastfsi.plotting.kb import kb_gauge_histories
 
                 info = setups[0].info
                 hist = dict(histories[0], time=histories[0]["time"] + t0)
                 kb_gauge_histories(folder / "gauges_kb.png", hist, sc.output.gauges, info["charge_mass"],
-                                   info["kb_burst"], centre=info["charge_center"])
+                                   info["kb_burst"], centre=info["charge_center"],
+                                   references=scenario_references(sc, info, float(setups[0].grid.dx)))
         grid = finals[0]
         labels = ("r [m]", "z [m]") if sc.domain.geometry != "cartesian" else ("x [m]", "y [m]", "z [m]")
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],

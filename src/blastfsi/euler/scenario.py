@@ -155,6 +155,20 @@ class EulerOutput(Output):
         "through the charge is the usual choice"))
 
 
+GaugeReference = Literal["auto", "incident", "reflected", "surface-incident"]
+
+
+class EulerGaugeOutput(EulerOutput):
+    """The euler method's outputs: ``EulerOutput`` plus the Kingery-Bulmash reference of each gauge."""
+
+    gauge_references: Optional[list[GaugeReference]] = Field(None, max_length=100, description=(
+        "Kingery-Bulmash reference of each gauge of a TNT charge, one per entry of output.gauges: 'auto' (the "
+        "default: 'reflected' for a gauge within 2 cells of a wall or symmetry face that faces the charge and "
+        "does not pass through its centre, normal or oblique by the ConWep blend at the angle of incidence; "
+        "else 'incident'), 'incident' (side-on; KB free-air burst for a sphere, hemispherical surface burst "
+        "for a hemisphere), 'reflected', 'surface-incident' (KB hemispherical surface burst of the charge mass)"))
+
+
 def check_plot_plane(output: EulerOutput, domain) -> None:
     """output.plot_plane_z: a 3D domain only, inside its z extent."""
     z = output.plot_plane_z
@@ -236,12 +250,19 @@ class EulerScenario(ScenarioBase):
     materials: dict[str, dict[str, float]] = Field(
         default_factory=dict, description="per-material overrides of library constants, e.g. {air = {gamma = 1.3}}")
     numerics: Numerics = Numerics()
-    output: EulerOutput = EulerOutput()
+    output: EulerGaugeOutput = EulerGaugeOutput()
     sweep: Optional[EulerSweep] = None
 
     @model_validator(mode="after")
     def _inside(self):
         check_gas_part(self, gas_materials(self.initial))
+        refs, gauges = self.output.gauge_references, self.output.gauges
+        if refs is not None and len(refs) != len(gauges):
+            raise ValueError(f"output.gauge_references: {len(refs)} entries for {len(gauges)} gauges "
+                             "(output.gauges); give one per gauge")
+        if refs is not None and self.initial.kind != "charge":
+            raise ValueError("output.gauge_references: Kingery-Bulmash references apply to a TNT charge "
+                             f"(initial.kind = 'charge'), not initial.kind = {self.initial.kind!r}")
         if self.sweep is not None and self.sweep.energy is not None and self.initial.kind != "point-energy":
             raise ValueError("sweep.energy needs initial.kind = 'point-energy'")
         return self
