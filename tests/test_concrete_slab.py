@@ -105,3 +105,16 @@ def test_model_output_fields_split_the_damages_and_give_nan_elsewhere():
     assert out["tensile_damage"][1] == pytest.approx(1.0, abs=1e-12)
     assert out["temperature"][2:].tolist() == [steel.room_temperature + 12.5, steel.room_temperature]
     assert np.isnan(out["compressive_damage"][2:]).all() and np.isnan(out["temperature"][:2]).all()
+
+
+def test_breach_diameter_is_where_half_the_thickness_failed():
+    s, h = 0.0025, 0.005
+    r = (np.arange(200) + 0.5) * s
+    z = -(np.arange(8) + 0.5) * s  # 8 rows through the thickness
+    R, Z = np.meshgrid(r, z, indexing="ij")
+    x = np.stack([R.ravel(), Z.ravel()], axis=1)
+    vol = 2.0 * np.pi * x[:, 0] * s ** 2
+    # failed through the whole thickness for r < 0.1, through the lower 3 rows (3/8 < 1/2) beyond
+    dmg = np.where((x[:, 0] < 0.1) | (x[:, 1] < -4.5 * s), 1.0, 0.2)
+    d = damage.breach_diameter(x, vol, dmg, normal_axis=1, load_axis=np.zeros(2), ring_width=h)
+    assert d == pytest.approx(0.2, abs=2 * h)

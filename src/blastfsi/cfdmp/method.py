@@ -591,6 +591,8 @@ class Cfdmp:
                                  particles.point_fields["damage"][solid], cell_size=setups[0].grid.cell_size,
                                  title=f"{sc.name}: structure damage at t = {sc.time.end:g} s",
                                  z_plane=sc.output.plot_plane_z)
+            if sc.initial.kind == "charge" and "compressive_damage" in particles.point_fields:
+                _face_damage_plot(folder / "faces.png", sc, particles)
         h = histories[0]
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")
@@ -607,6 +609,31 @@ class Cfdmp:
 
 
 METHOD = register(Cfdmp())
+
+
+def _face_damage_plot(png, sc: CfdmpScenario, particles) -> None:
+    """plots/faces.png: the failure (damage 1) on the concrete's face toward the charge and the tensile damage
+    on the opposite face, in the reference configuration (000 Fig. 14)."""
+    from blastfsi.plotting.fields import plot_face_damage
+
+    f = particles.point_fields
+    concrete = ~np.isnan(f["compressive_damage"])
+    if not concrete.any():
+        return
+    nd = particles.positions.shape[1]
+    reference = (particles.positions - np.nan_to_num(f["displacement"]))[concrete]
+    depth = (sc.domain.upper[0] - sc.domain.lower[0]) / sc.grid.cells  # one cell deep
+    loaded = "upper" if sc.initial.center[-1] > reference[:, -1].max() else "lower"
+    back = "lower" if loaded == "upper" else "upper"
+    front_layer = damage.face_layer(reference[:, -1], loaded, depth)
+    back_layer = damage.face_layer(reference[:, -1], back, depth)
+    lateral = reference[:, :nd - 1]
+    plot_face_damage(png, [(f"{loaded} face: failed (damage 1)", lateral[front_layer],
+                            (f["damage"][concrete][front_layer] >= 1.0).astype(float)),
+                           (f"{back} face: tensile damage D_t", lateral[back_layer],
+                            f["tensile_damage"][concrete][back_layer])],
+                     axisymmetric=sc.domain.geometry == "axisymmetric",
+                     title=f"{sc.name}: concrete faces at t = {sc.time.end:g} s (reference positions)")
 
 
 BACK_FACE_THRESHOLDS = (0.5, 0.75, 0.99)  # of the tensile damage D_t (concrete-25mpa spalls at 0.99)
@@ -659,6 +686,12 @@ def _loaded_faces(sc: CfdmpScenario, setup: problem.Setup, state: State) -> list
                         "diameter of the zone around the charge's axis where at least half of the loaded face's area "
                         "(one cell deep, reference configuration; rings one cell wide) failed (damage 1: crushed or "
                         "spalled)"),
+                    "breach_diameter": damage.breach_diameter(reference[mine], volume0[mine], failed[mine],
+                                                              normal_axis=axis, load_axis=center,
+                                                              ring_width=setup.grid.cell_size),
+                    "breach_diameter_definition": (
+                        "diameter of the zone around the charge's axis where at least half of the structure's "
+                        "volume through its thickness failed"),
                     "failed": front, "compressive_damage": face(fields["compressive_damage"], loaded),
                     "back_face": f"{back} {AXES[axis]}",
                     "back_face_tensile_damage": face(fields["tensile_damage"], back, thresholds=BACK_FACE_THRESHOLDS)})

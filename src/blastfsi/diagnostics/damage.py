@@ -15,7 +15,9 @@ reaches the threshold. Two sizes of the damaged region:
 * ``equivalent_diameter``: the diameter of the disk of the whole damaged area of the face, edges included
   (the width of the strips in 2D plane strain).
 
-Both are reported for several thresholds, so their sensitivity to it shows.
+Both are reported for several thresholds, so their sensitivity to it shows. Through the body's thickness,
+``breach_diameter`` is the same connected measure on all its particles (volume shares): the zone around the
+axis where at least ``fraction`` of the thickness has failed, where the structure breaks through.
 """
 from __future__ import annotations
 
@@ -77,3 +79,11 @@ def damaged_face(reference: np.ndarray, volume0: np.ndarray, damage: np.ndarray,
             "diameter": 2.0 * connected_radius(distance, share, hit, ring_width, fraction),
             "equivalent_diameter": float(area if planar else 2.0 * np.sqrt(area / np.pi))})
     return out
+
+
+def breach_diameter(reference: np.ndarray, volume0: np.ndarray, damage: np.ndarray, *, normal_axis: int,
+                    load_axis: np.ndarray, ring_width: float, threshold: float = 1.0, fraction: float = 0.5) -> float:
+    """Diameter of the zone around the load's axis where at least ``fraction`` of the body's volume through its
+    thickness has ``damage`` >= ``threshold`` (rings of ``ring_width``; module docstring)."""
+    distance = np.linalg.norm(np.delete(reference - load_axis, normal_axis, axis=1), axis=1)
+    return 2.0 * connected_radius(distance, volume0, damage >= threshold, ring_width, fraction)

@@ -99,3 +99,35 @@ def plot_particle_damage(png_path, positions, damage, *, cell_size: float, axis_
     fig.tight_layout()
     fig.savefig(Path(png_path), dpi=120)
     plt.close(fig)
+
+
+def plot_face_damage(png_path, faces: list[tuple[str, np.ndarray, np.ndarray]], *, axisymmetric: bool,
+                     title: str = "") -> None:
+    """Save a PNG of damage on faces of a structure, side by side (000 Fig. 14): each face a (label, lateral
+    positions (P, 1) r or (P, 2) x-y, values 0..1). r-z: the face revolved, ring means over 60 rings;
+    3D: the particles in plan."""
+    fig, axes = plt.subplots(1, len(faces), figsize=(4.2 * len(faces), 4.2), squeeze=False,
+                             subplot_kw={"projection": "polar"} if axisymmetric else {})
+    for ax, (label, lateral, values) in zip(axes[0], faces):
+        lateral, values = np.asarray(lateral, float), np.asarray(values, float)
+        if axisymmetric:
+            r = lateral[:, 0]
+            edges = np.linspace(0.0, r.max(initial=1e-9), 61)
+            ring = np.clip(np.digitize(r, edges) - 1, 0, len(edges) - 2)
+            counts = np.bincount(ring, minlength=len(edges) - 1)
+            mean = np.bincount(ring, values, len(edges) - 1) / np.maximum(counts, 1)
+            theta = np.linspace(0.0, 2.0 * np.pi, 121)
+            shown = ax.pcolormesh(theta, edges, np.tile(mean[:, None], (1, len(theta) - 1)), vmin=0.0, vmax=1.0,
+                                  cmap="inferno_r")
+            ax.set_xticks([])
+            ax.tick_params(axis="y", labelsize=7)
+            ax.set_title(f"{label}\n(radius in m)", fontsize=9)
+        else:
+            shown = ax.scatter(lateral[:, 0], lateral[:, 1], c=values, s=4, cmap="inferno_r", vmin=0.0, vmax=1.0)
+            ax.set_aspect("equal")
+            ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]")
+            ax.set_title(label, fontsize=9)
+    fig.colorbar(shown, ax=axes[0].tolist(), shrink=0.8, label="damage [-]")
+    fig.suptitle(title, fontsize=10)
+    fig.savefig(Path(png_path), dpi=120)
+    plt.close(fig)
