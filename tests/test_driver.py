@@ -217,14 +217,61 @@ def test_piston_squeezing_gas_against_a_wall_exits_with_code_3(tmp_path, capsys)
     assert len(times) >= 9 and times[0] == 0.0 and np.all(np.diff(times) > 0.0) and times[-1] <= t  # every t_c / 10
 
 
-def test_steps_split_each_sample_interval_into_equal_steps():
-    """A stable step of 0.3 and samples every 1.0: each interval takes ceil(1 / 0.3) = 4 steps of 0.25 (not
-    three of 0.3 and a short one: a modulated dt pumps an explicit integrator's fast modes, blastfsi.timeloop),
-    and every sample lands on its time."""
-    state = DecayState(jnp.zeros(32), **timeloop.clock(4, 1, jnp.float64))  # y: the log of the steps
-    out = timeloop.run_until(state, 3.0, 100, 1.0, 1e-6, stable_dt=lambda s: jnp.asarray(0.3),
-                             step=lambda s, dt: s._replace(y=s.y.at[s.step].set(dt)),
-                             history_row=lambda s: s.t[None])
-    assert int(out.step) == 12
-    np.testing.assert_allclose(np.asarray(out.y[:12]), 0.25, rtol=1e-14)
-    np.testing.assert_array_equal(np.asarray(out.hist[:, 0]), [0.0, 1.0, 2.0, 3.0])
+def _logged(stable, t_stop, n_samples, sample_interval, steps=64):
+    """A toy state advanced to each of the stop times ``t_stop`` (as the driver does): y[j] logs step j's
+    dt / dt_stable, y[-1] a quantity linear in time (dy = 2 dt); history rows (t, y[-1], t^2)."""
+    state = DecayState(jnp.zeros(steps + 1), **timeloop.clock(n_samples, 3, jnp.float64))
+
+    def step(s, dt):
+        return s._replace(y=s.y.at[s.step].set(dt / stable(s)).at[-1].add(2.0 * dt))
+
+    for t in t_stop:
+        state = timeloop.run_until(state, t, steps, sample_interval, 1e-6, stable_dt=stable, step=step,
+                                   history_row=lambda s: jnp.stack([s.t, s.y[-1], s.t ** 2]))
+    return state
+
+
+def test_history_samples_never_shorten_a_step():
+    """Samples every 0.05 and a stable step of 0.3 to 3.0: ten steps of 0.3 (samples used to be landed on,
+    60 steps of 0.05); the rows at the sample times are interpolated within the steps, exact for the
+    quantity linear in time, the first and the last rows exact."""
+    out = _logged(lambda s: jnp.asarray(0.3), [3.0], 61, 0.05)
+    assert int(out.step) == 10
+    np.testing.assert_allclose(np.asarray(out.y[:10]), 1.0, rtol=1e-14)
+    times = 0.05 * np.arange(61)
+    hist = np.asarray(out.hist)
+    np.testing.assert_allclose(hist[:, 0], times, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(hist[:, 1], 2.0 * times, rtol=1e-14, atol=1e-15)
+    assert hist[0, 0] == 0.0 and hist[-1, 0] == 3.0 and hist[-1, 1] == float(out.y[-1])
+    # t^2 interpolated linearly: off by at most (h/2)^2 within a step of h = 0.3, exact at the steps' ends
+    err = hist[:, 2] - times ** 2
+    assert -1e-13 <= err.min() and err.max() <= 0.15 ** 2 + 1e-13 and np.all(np.abs(err[::6]) < 1e-13)
+
+
+def test_stop_times_are_landed_on_without_a_short_step():
+    """The time left to a stop is split into the fewest equal steps no longer than the stable one: 1.0 with a
+    stable step of 0.3 in four steps of 0.25 (not three of 0.3 and one of 0.1: a modulated dt pumps an
+    explicit integrator's fast modes, blastfsi.timeloop); with a stable step that varies and stop times that
+    are not multiples of it, every step is within [0.5, 1] of the stable one (up to its growth in a step), and
+    each stop is landed on exactly."""
+    out = _logged(lambda s: jnp.asarray(0.3), [1.0], 2, 1.0)
+    assert int(out.step) == 4 and float(out.t) == 1.0
+    np.testing.assert_allclose(np.asarray(out.y[:4]), 0.25 / 0.3, rtol=1e-14)
+    stops = [0.123, 0.5, 0.77, 1.0]
+    out = _logged(lambda s: 0.021 * (1.0 + s.t) ** 2, stops, 20001, 5e-5, steps=200)
+    n = int(out.step)
+    ratio = np.asarray(out.y[:n])
+    assert float(out.t) == 1.0 and n < 40 and 0.45 <= ratio.min() and ratio.max() <= 1.0 + 1e-12
+    hist = np.asarray(out.hist)
+    np.testing.assert_allclose(hist[:, 1], 2.0 * hist[:, 0], rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(hist[:, 0], 5e-5 * np.arange(20001), rtol=1e-13, atol=1e-15)
+
+
+def test_steps_do_not_depend_on_the_history_samples():
+    """Through the driver: 2001 history samples take the steps of 2 (the old landing on every sample took
+    2000), and checkpoint times an ulp from snapshot times are one stop time."""
+    fewest = simulation.run(decay_data(output__history_samples=2))
+    many = simulation.run(decay_data(output__history_samples=2001))
+    assert many.summary["steps"] == fewest.summary["steps"] < 60
+    fields, ckpt, stops = simulation.stop_times(parse(decay_data(output__fields=101, output__checkpoint_interval=0.05)))
+    assert set(ckpt) <= set(fields) and len(stops) == 101

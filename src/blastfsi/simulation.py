@@ -140,15 +140,22 @@ def _stack(trees: list, what: str):
 
 
 def stop_times(sc: ScenarioBase) -> tuple[list[float], list[float], list[float]]:
-    """(field snapshot times, checkpoint times, all stop times) of the output schedule."""
+    """(field snapshot times, checkpoint times, all stop times) of the output schedule. A checkpoint
+    time within round-off (1e-9 x end) of a snapshot time or the end is that time: the time loop lands
+    on every stop time, and two an ulp apart would cost a step of an ulp."""
     end = sc.time.end
     fields = [float(t) for t in np.linspace(0.0, end, sc.output.fields)] if sc.output.fields >= 2 else (
         [end] if sc.output.fields == 1 else [])
     ckpt = []
     if sc.output.checkpoint_interval is not None:
         n = int(np.floor(end / sc.output.checkpoint_interval + 1e-9))
-        ckpt = [k * sc.output.checkpoint_interval for k in range(1, n + 1)]
+        ckpt = [_snapped(k * sc.output.checkpoint_interval, [*fields, end], 1e-9 * end) for k in range(1, n + 1)]
     return fields, ckpt, sorted(set(fields) | set(ckpt) | {end})
+
+
+def _snapped(t: float, times: list[float], tol: float) -> float:
+    """The first of ``times`` within ``tol`` of ``t``, or ``t``."""
+    return next((s for s in times if abs(s - t) <= tol), t)
 
 
 _EXECUTABLES: dict = {}  # (method, static, argument types) -> compiled jit(vmap(advance)), or jit(advance) for one member
