@@ -118,3 +118,17 @@ def test_breach_diameter_is_where_half_the_thickness_failed():
     dmg = np.where((x[:, 0] < 0.1) | (x[:, 1] < -4.5 * s), 1.0, 0.2)
     d = damage.breach_diameter(x, vol, dmg, normal_axis=1, load_axis=np.zeros(2), ring_width=h)
     assert d == pytest.approx(0.2, abs=2 * h)
+
+
+def test_annulus_zone_is_measured_from_its_inner_edge():
+    s, h = 0.0025, 0.005
+    x, vol = _ring_face(0.75, h, s)
+    ring = x[:, 0] >= 0.1  # the body around a defect of radius 0.1 m
+    x, vol = x[ring], vol[ring]
+    dmg = np.where(x[:, 0] < 0.2, 1.0, 0.0)
+    out = damage.damaged_face(x, vol, dmg, normal_axis=1, side="upper", spacing=s, rows=2,
+                              load_axis=np.zeros(2), ring_width=h)
+    assert out["by_threshold"][-1]["diameter"] == pytest.approx(0.4, abs=2 * h)
+    undamaged_edge = damage.damaged_face(x, vol, np.where(x[:, 0] > 0.3, 1.0, 0.0), normal_axis=1, side="upper",
+                                         spacing=s, rows=2, load_axis=np.zeros(2), ring_width=h)
+    assert undamaged_edge["by_threshold"][-1]["diameter"] == 0.0

@@ -11,7 +11,8 @@ reaches the threshold. Two sizes of the damaged region:
 * ``diameter`` (the crushing diameter): the face is cut into rings (strips in 2D plane strain) one ``ring_width``
   wide around the load's axis; walking out from the axis, every ring whose damaged share of area is at least
   ``fraction`` adds its width, and the first ring below it adds its damaged share of the width and ends the zone:
-  the damaged zone connected to the axis, to a fraction of a ring, whatever lies farther out (an edge's damage).
+  the damaged zone connected to the axis (to the inner edge of an annulus, whose inner rings are skipped), to a
+  fraction of a ring, whatever lies farther out (an edge's damage).
 * ``equivalent_diameter``: the diameter of the disk of the whole damaged area of the face, edges included
   (the width of the strips in 2D plane strain).
 
@@ -46,11 +47,14 @@ def connected_radius(distance: np.ndarray, share: np.ndarray, damaged: np.ndarra
     rings = ring.max(initial=-1) + 1
     total = np.bincount(ring, weights=share, minlength=rings)
     hit = np.bincount(ring, weights=np.where(damaged, share, 0.0), minlength=rings)
-    shares = np.divide(hit, total, out=np.zeros(rings), where=total > 0.0)
-    below = np.flatnonzero(shares < fraction)
+    present = total > 0.0  # (rings the body does not reach, inside an annulus, are skipped)
+    shares = np.divide(hit, total, out=np.zeros(rings), where=present)
+    below = np.flatnonzero(present & (shares < fraction))
     if below.size == 0:
         return float(rings * ring_width)
     k = below[0]
+    if k == np.argmax(present):  # the body's innermost ring is not damaged: no zone
+        return 0.0
     return float((k + shares[k]) * ring_width)
 
 
