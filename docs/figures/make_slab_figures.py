@@ -138,6 +138,10 @@ def figures(folder: Path) -> None:
         pts = [(r["mass"] ** (1 / 3) / HEIGHT, r["faces"][0]["crushing_diameter"] / HEIGHT) for r in rows if pick(r)]
         if pts:
             ax.plot(*zip(*pts), marker, ls="none", label=label)
+    breach = [(r["mass"] ** (1 / 3) / HEIGHT, r["faces"][0]["breach_diameter"] / HEIGHT) for r in rows
+              if r["run"].startswith("rz-") and r["dx"] == 0.005 and r["faces"][0].get("breach_diameter") is not None]
+    if breach:
+        ax.plot(*zip(*breach), "o", mfc="none", color="C0", label="this code, r-z 5 mm: breach (half the thickness failed)")
     ax.set_xlabel(r"$W^{1/3}/h$ [kg$^{1/3}$/m]"), ax.set_ylabel(r"$D/h$ [-]")
     ax.set_title("Crushing diameter, slab 0.15 m, h = 0.5 m (000 Fig. 15)", fontsize=10)
     ax.grid(alpha=0.3), ax.legend(fontsize=8)
@@ -162,10 +166,10 @@ def markdown_tables(rows: list[dict], eq67: dict) -> str:
     out = ["| run | W [kg] | cells | top face failed D (thresholds 0.5 / 0.75 / 1) [mm] | compressive D (1) [mm] "
            "| breach D [mm] | back face D_t >= 0.5 D [mm] | Eq. 67 [mm] | experiment [mm] | failed volume [L] "
            "| mass / energy residual | steps | loop [s] |", "|" + "---|" * 13]
-    for r in rows:
-        f, key = r["faces"][0], f"{r['mass']:g}"
+    for r, f in ((r, f) for r in rows for f in r["faces"]):
+        key, run = f"{r['mass']:g}", r["run"] + (f" (structure {f['structure']})" if len(r["faces"]) > 1 else "")
         failed = " / ".join(mm(t["diameter"]) for t in f["failed"])
-        out.append(f"| {r['run']} | {r['mass']:g} | {r['dx'] * 1e3:g} mm | {failed} | {mm(f['compressive'][-1]['diameter'])} "
+        out.append(f"| {run} | {r['mass']:g} | {r['dx'] * 1e3:g} mm | {failed} | {mm(f['compressive'][-1]['diameter'])} "
                    f"| {mm(f['breach_diameter'])} | {mm(f['back_face_tensile'][0]['diameter'])} "
                    f"| {mm(eq67[key])} | {mm(EXPERIMENT.get(r['mass']))} "
                    f"| {r['failed_volume'] * 1e3:.1f} | {r['mass_residual_relative']:.0e} / {r['energy_residual_relative']:.1e} "
