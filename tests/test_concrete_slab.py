@@ -132,3 +132,10 @@ def test_annulus_zone_is_measured_from_its_inner_edge():
     undamaged_edge = damage.damaged_face(x, vol, np.where(x[:, 0] > 0.3, 1.0, 0.0), normal_axis=1, side="upper",
                                          spacing=s, rows=2, load_axis=np.zeros(2), ring_width=h)
     assert undamaged_edge["by_threshold"][-1]["diameter"] == 0.0
+
+
+def test_sides_toward_the_load():
+    z = np.array([-0.15, -0.1, 0.0])
+    assert damage.sides_toward(0.5, z) == ("upper", "lower")
+    assert damage.sides_toward(-1.0, z) == ("lower", "upper")
+    assert damage.sides_toward(-0.05, z) is None

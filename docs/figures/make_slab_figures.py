@@ -18,6 +18,7 @@ whose top-face particles failed; blastfsi.diagnostics.damage); Eq. (67) from bla
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -27,10 +28,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from blastfsi.diagnostics.damage import face_layer  # noqa: E402
 from blastfsi.exact.concrete_crushing import crushing_diameter  # noqa: E402
 from blastfsi.io.results import read_snapshot  # noqa: E402
-from blastfsi.plotting.fields import plot_face_damage  # noqa: E402
 
 HERE = Path(__file__).parent
 HEIGHT = 0.5  # m, the charge's centre above the slab's top face (000 Sec. 5.3)
@@ -89,18 +88,9 @@ def _row(name: str, summary: dict) -> dict:
             "steps": summary["steps"], "loop_time": summary["loop_time"], "compile_time": summary["compile_time"]}
 
 
-def faces_figure(out: Path, png: Path, title: str) -> None:
-    """Fig. 14: the top face's failure and the back face's tensile damage (r-z, revolved), one cell deep."""
-    p = _final_particles(out)
-    concrete = ~np.isnan(p["compressive_damage"])
-    reference = (p["coordinates"] - np.nan_to_num(p["displacement"]))[concrete]
-    depth = float(json.loads((out / "summary.json").read_text())["dx"])
-    top = face_layer(reference[:, -1], "upper", depth)
-    bottom = face_layer(reference[:, -1], "lower", depth)
-    plot_face_damage(png, [("top face: failed (damage 1)", reference[top, :-1],
-                            (p["damage"][concrete][top] >= 1.0).astype(float)),
-                           ("back face: tensile damage D_t", reference[bottom, :-1], p["tensile_damage"][concrete][bottom])],
-                     axisymmetric=reference.shape[1] == 2, title=title)
+def faces_figure(out: Path, png: Path) -> None:
+    """Fig. 14: the run's own plots/faces.png (the top face's failure, the back face's tensile damage)."""
+    shutil.copyfile(out / "plots" / "faces.png", png)
 
 
 def section_figure(runs: dict[str, Path], png: Path) -> None:
@@ -151,7 +141,7 @@ def figures(folder: Path) -> None:
 
     for name, png in (("rz-4kg-5mm", "concrete_slab_faces.png"), ("defect-4kg-5mm", "concrete_slab_defect_faces.png")):
         if (folder / name / "summary.json").exists():
-            faces_figure(folder / name, HERE / png, f"{name}: 4 kg TNT at 0.5 m (000 Fig. 14 / 19)")
+            faces_figure(folder / name, HERE / png)
     pair = {n: folder / n for n in ("rz-4kg-5mm", "defect-4kg-5mm") if (folder / n / "summary.json").exists()}
     if pair:
         section_figure(pair, HERE / "concrete_slab_defect_sections.png")

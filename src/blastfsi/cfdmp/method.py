@@ -592,7 +592,7 @@ class Cfdmp:
                                  title=f"{sc.name}: structure damage at t = {sc.time.end:g} s",
                                  z_plane=sc.output.plot_plane_z)
             if sc.initial.kind == "charge" and "compressive_damage" in particles.point_fields:
-                _face_damage_plot(folder / "faces.png", sc, particles)
+                _face_damage_plot(folder / "faces.png", sc, particles, setups[0].grid.cell_size)
         h = histories[0]
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")
@@ -611,7 +611,7 @@ class Cfdmp:
 METHOD = register(Cfdmp())
 
 
-def _face_damage_plot(png, sc: CfdmpScenario, particles) -> None:
+def _face_damage_plot(png, sc: CfdmpScenario, particles, cell_size: float) -> None:
     """plots/faces.png: the failure (damage 1) on the concrete's face toward the charge and the tensile damage
     on the opposite face, in the reference configuration (000 Fig. 14)."""
     from blastfsi.plotting.fields import plot_face_damage
@@ -622,11 +622,12 @@ def _face_damage_plot(png, sc: CfdmpScenario, particles) -> None:
         return
     nd = particles.positions.shape[1]
     reference = (particles.positions - np.nan_to_num(f["displacement"]))[concrete]
-    depth = (sc.domain.upper[0] - sc.domain.lower[0]) / sc.grid.cells  # one cell deep
-    loaded = "upper" if sc.initial.center[-1] > reference[:, -1].max() else "lower"
-    back = "lower" if loaded == "upper" else "upper"
-    front_layer = damage.face_layer(reference[:, -1], loaded, depth)
-    back_layer = damage.face_layer(reference[:, -1], back, depth)
+    sides = damage.sides_toward(sc.initial.center[-1], reference[:, -1])
+    if sides is None:
+        return
+    loaded, back = sides
+    front_layer = damage.face_layer(reference[:, -1], loaded, cell_size)  # (one cell deep)
+    back_layer = damage.face_layer(reference[:, -1], back, cell_size)
     lateral = reference[:, :nd - 1]
     plot_face_damage(png, [(f"{loaded} face: failed (damage 1)", lateral[front_layer],
                             (f["damage"][concrete][front_layer] >= 1.0).astype(float)),
@@ -664,13 +665,10 @@ def _loaded_faces(sc: CfdmpScenario, setup: problem.Setup, state: State) -> list
         mine = setup.body == b
         if setup.models[material[mine][0]].name != "hjc":
             continue
-        z = reference[mine, axis]
-        if center[axis] > z.max():
-            loaded, back = "upper", "lower"
-        elif center[axis] < z.min():
-            loaded, back = "lower", "upper"
-        else:
+        sides = damage.sides_toward(center[axis], reference[mine, axis])
+        if sides is None:
             continue
+        loaded, back = sides
 
         def face(values, side, **kw):
             return damage.damaged_face(reference[mine], volume0[mine], values[mine], normal_axis=axis, side=side,

@@ -27,6 +27,17 @@ import numpy as np
 THRESHOLDS = (0.5, 0.75, 1.0)
 
 
+def sides_toward(load: float, normal_coordinate: np.ndarray) -> tuple[str, str] | None:
+    """(the face toward a load at normal coordinate ``load``, the opposite face) of a body whose particles have
+    these normal coordinates: ("upper", "lower") for a load above it, ("lower", "upper") below; None when the
+    load lies within the body's extent."""
+    if load > normal_coordinate.max():
+        return "upper", "lower"
+    if load < normal_coordinate.min():
+        return "lower", "upper"
+    return None
+
+
 def face_layer(normal_coordinate: np.ndarray, side: str, depth: float) -> np.ndarray:
     """Mask of the particles within ``depth`` of the body's face ``side`` ("upper" | "lower") along the
     normal (reference coordinates)."""
