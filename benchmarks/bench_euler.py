@@ -12,8 +12,8 @@ loop stays on the device; compilation and warm-up calls are excluded; N is
 chosen so one call lasts >= --min-time s (default 10: a call's fixed costs, such
 as the first touch of its temporary buffers -- about 0.4 s at 128^3 float64 --
 then stay a few per cent), and cells x N / (best of --repeats calls) is
-reported. float32 rows run in a subprocess with BLASTFSI_X64=0 (how blastfsi
-selects its precision, see blastfsi/__init__.py).
+reported. float32 rows run in a subprocess with BLASTFSI_X64=0 (the benchmarks'
+precision switch: they call the kernels directly, not through a run's numerics.precision).
 
 Memory-traffic model (bytes per cell-step, b = 8 (float64) or 4 (float32), five conservative fields):
 * lax-wendroff, split (000 Eq. 6): six directional operators per 3D step; each at
@@ -69,7 +69,7 @@ def _jax_setup():
     import jax.numpy as jnp
     import numpy as np
 
-    import blastfsi  # noqa: F401  (sets the precision from BLASTFSI_X64)
+    jax.config.update("jax_enable_x64", os.environ.get("BLASTFSI_X64", "1") != "0")  # (the module docstring)
     from blastfsi import euler
     from blastfsi.eos.jwl import ideal_gas_params
     return jax, jnp, np, euler, ideal_gas_params

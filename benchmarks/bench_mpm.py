@@ -21,7 +21,8 @@ inside the loop (:func:`blastfsi.mpm.sort_by_cell`), the sort counted in the tim
 Each row also gives the process CPU seconds per wall second of the timed calls
 (2.0 = both cores of this machine busy for us; less = other work shared them) and
 the 1-minute load average before and after. float32 rows run in a subprocess with
-BLASTFSI_X64=0 (how blastfsi selects its precision).
+BLASTFSI_X64=0 (the benchmarks' precision switch: they call the kernels directly, not
+through a run's numerics.precision).
 """
 from __future__ import annotations
 
@@ -44,7 +45,7 @@ def setup(cells: int, combined):
     import jax.numpy as jnp
     import numpy as np
 
-    import blastfsi  # noqa: F401  (precision from BLASTFSI_X64)
+    jax.config.update("jax_enable_x64", os.environ.get("BLASTFSI_X64", "1") != "0")  # (the module docstring)
     from blastfsi import mpm
     from blastfsi.constitutive import get
     from blastfsi.constitutive import models as _models  # noqa: F401

@@ -55,7 +55,7 @@ def main():
     rows.append(measure("Fig. 5 sweep, 65 members x 1000 cells, one batched call", batch))
     report = {"device": str(jax.devices()[0]), "backend": jax.default_backend(), "cpu_count": os.cpu_count(),
               "machine": platform.processor() or platform.machine(), "jax": jax.__version__,
-              "x64": bool(jax.config.jax_enable_x64), "rows": rows}
+              "precision": "float64", "rows": rows}
     text = json.dumps(report, indent=2)
     print(text)
     if args.out:

@@ -48,7 +48,7 @@ import blastfsi
 sys.path.insert(0, "docs/figures")
 from make_000_figures import RUNS
 out, end, names = Path(sys.argv[1]), sys.argv[2], sys.argv[3:]
-print("device", jax.devices()[0], "x64", jax.config.jax_enable_x64, flush=True)
+print("device", jax.devices()[0], flush=True)
 for name in names:
     example, overrides = RUNS[name]
     overrides = dict(overrides, **({"time.end": float(end)} if end else {}))

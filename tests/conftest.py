@@ -1,6 +1,16 @@
+import os
+
+import jax
 import pytest
 
-import blastfsi  # noqa: F401  (enables float64)
+# Runs set their own precision (numerics.precision), but many tests call the kernels directly on float64
+# arrays and compare with float64 references: the test process computes in float64, as a user's script
+# calling the kernels would after jax.config.update("jax_enable_x64", True). (tests/test_precision.py checks
+# in a fresh interpreter that importing blastfsi leaves the setting alone.)
+jax.config.update("jax_enable_x64", True)
+# No persistent compilation cache: the suite never writes to the user's cache directory, and each test
+# compiles what it runs (tests/test_runtime.py exercises the cache in a temporary directory).
+os.environ["BLASTFSI_NO_CACHE"] = "1"
 
 P0, RHO0 = 1.048e5, 1.225  # 002 Sec. 3 air (ERRATA 002-7)
 

@@ -1,4 +1,7 @@
-"""Helpers that steer XLA's fusion and control flow (shared by the Eulerian and MPM kernels).
+"""Helpers that steer XLA's fusion and control flow (shared by the Eulerian and MPM kernels), and
+the package's backend policy: every choice that depends on the device kind is one function here
+(:func:`device_control_flow`, :func:`combined_scatter`, :func:`blocked_sweeps`), and no other module
+asks JAX for its backend (:func:`backend`; ``tests/test_runtime.py`` checks it).
 
 On the CPU backend a conditional or a loop costs nothing but the boundary it puts
 between fusions, which these helpers use. On a GPU each conditional's predicate and
@@ -6,7 +9,7 @@ each loop iteration's test is copied to the host before the next kernel is launc
 (a round trip that leaves the device idle): there the helpers select between
 computed branches and unroll short loops instead. (The he-slab-2d coupled step held ~60
 such conditionals; with these forms it took 1.4 ms on an H200, the device's kernels busy
-1.17 ms of it: docs/cfdmp.md, "GPU".)
+1.17 ms of it: benchmarks/results_cfdmp.json.)
 """
 from __future__ import annotations
 
@@ -19,7 +22,31 @@ import jax.numpy as jnp
 
 def device_control_flow() -> bool:
     """True where conditionals and loops run without a host round trip (the CPU backend)."""
-    return jax.default_backend() == "cpu"
+    return _cpu()
+
+
+def combined_scatter() -> bool:
+    """True where the particle-to-grid transfer is fastest as one scatter of rows of all channels (GPUs);
+    False on the CPU, where XLA:CPU scatters rows with a generic per-element loop and scalar scatters,
+    one per channel and stencil node, are faster (:func:`blastfsi.mpm.musl.particle_to_grid`)."""
+    return not _cpu()
+
+
+def blocked_sweeps() -> bool:
+    """True where a large grid's directional operator is faster swept block by block, its temporaries
+    kept in cache (the CPU: :mod:`blastfsi.euler.blocking`); False on a GPU, whose whole-grid kernel
+    runs across all its cores and a loop of small blocks would leave most of them idle."""
+    return _cpu()
+
+
+def backend() -> str:
+    """The backend the kernels are traced for ("cpu", "gpu", ...), which the choices above follow (a key of
+    the stored traced programs, :func:`blastfsi.runtime.lowered`)."""
+    return jax.default_backend()
+
+
+def _cpu() -> bool:
+    return backend() == "cpu"
 
 
 def materialise(compute, operand, taken=None):

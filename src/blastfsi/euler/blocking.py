@@ -11,6 +11,7 @@ import math
 
 import jax
 
+from blastfsi import xla
 from blastfsi.euler.config import Config
 
 BLOCK_CELLS = 32768  # cells per block of a blocked operator (its temporaries stay in the 2 MiB L2 of a core)
@@ -20,12 +21,12 @@ BLOCKED_ABOVE = 1 << 17  # grids of more cells are swept block by block (below, 
 def blocks(cfg: Config, axis: int):
     """(blocking axis, planes per block) of the operator along ``axis``, or None (one block).
 
-    Measured with jax 0.10 on this 2-core CPU (docs/euler.md): Lax-Wendroff's blocks are 1.3-1.7x
+    Measured with jax 0.10 on this 2-core CPU (docs/verification.md): Lax-Wendroff's blocks are 1.3-1.7x
     faster on 64^3, 128^3, 512^2 and 1024^2 grids and 1.8x slower on 200^2, hence BLOCKED_ABOVE;
-    HLLC-MUSCL's (its flux divergence per axis) 2.1x faster at 128^3. CPU only: a GPU runs a
-    whole-grid kernel across all its cores, and a loop of small blocks would leave them idle.
+    HLLC-MUSCL's (its flux divergence per axis) 2.1x faster at 128^3. CPU only
+    (:func:`blastfsi.xla.blocked_sweeps`).
     """
-    if len(cfg.shape) == 1 or math.prod(cfg.shape) <= BLOCKED_ABOVE or jax.default_backend() != "cpu":
+    if len(cfg.shape) == 1 or math.prod(cfg.shape) <= BLOCKED_ABOVE or not xla.blocked_sweeps():
         return None
     b = 0 if axis != 0 else 1
     m = cfg.shape[b]
