@@ -106,7 +106,7 @@ def test_overwrite_refuses_a_directory_that_is_not_a_results_directory(tmp_path,
     (mine / "fields" / "keep.dat").write_text("a user's file")
     (mine / "scenario.toml").write_text("name = 'mine'")
     file = scenario_file(tmp_path, tiny("lagrangian1d"))
-    assert cli.main(["run", str(file), "--out", str(mine), "--overwrite"]) == cli.EXIT_OUTPUT
+    assert cli.main(["run", str(file), "--out", str(mine), "--overwrite", "--quiet"]) == cli.EXIT_OUTPUT
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{mine} is not a blastfsi results directory" in err
     assert (mine / "fields" / "keep.dat").read_text() == "a user's file"
@@ -122,7 +122,8 @@ def test_overwrite_leaves_nothing_of_the_earlier_run(tmp_path, capsys):
     file = scenario_file(tmp_path, tiny("lagrangian1d", checkpoints=False, **{"output.fields": 1}))
     assert cli.main(["run", str(file), "--out", str(out), "--overwrite", "--json"]) == 0, capsys.readouterr().err
     left = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
-    assert left == [".blastfsi", "checkpoints", "fields", "fields/member0.xdmf", "fields/snap_0000.h5", "history.csv",
+    assert left == [".blastfsi", "checkpoints", "fields", "fields/member0.xdmf", "fields/member0_0000.xdmf",
+                    "fields/snap_0000.h5", "history.csv",
                     "plots", "scenario.toml", "summary.json"]
 
 
@@ -131,7 +132,7 @@ def test_out_that_cannot_be_a_directory_is_one_line_exit_4(tmp_path, capsys, whe
     (tmp_path / "f").write_text("not a directory")
     out = tmp_path / "f" if where == "a file" else tmp_path / "f" / "out"
     file = scenario_file(tmp_path, tiny("lagrangian1d"))
-    assert cli.main(["run", str(file), "--out", str(out)]) == cli.EXIT_OUTPUT
+    assert cli.main(["run", str(file), "--out", str(out), "--quiet"]) == cli.EXIT_OUTPUT
     err = capsys.readouterr().err
     assert err.startswith(f"error: results directory {out} ") and err.count("\n") == 1
     assert (tmp_path / "f").read_text() == "not a directory"
@@ -170,7 +171,7 @@ def test_restart_falls_back_to_the_newest_readable_checkpoint(tmp_path, capsys):
     for f in ckpt.glob("ckpt_*.h5"):
         if f.is_file():
             f.write_bytes(b"garbage")
-    assert cli.main(["run", "--restart", str(out)]) == cli.EXIT_OUTPUT
+    assert cli.main(["run", "--restart", str(out), "--quiet"]) == cli.EXIT_OUTPUT
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(f"error: --restart: no readable checkpoint in {ckpt}")
     assert all(f"ckpt_000{k}.h5" in err for k in range(1, 7))
@@ -206,10 +207,10 @@ def test_interrupted_mid_chunk_then_restarted_is_bit_for_bit(tmp_path, monkeypat
     out = tmp_path / "out"
     update, handler = simulation._Progress.update, signal.getsignal(signal.SIGINT)
 
-    def ctrl_c_while_running(self, t, step, dt):  # (between chunks, the first Python the signal can run in)
+    def ctrl_c_while_running(self, t, step):  # (between chunks, the first Python the signal can run in)
         if 2.5e-4 < t < 4e-4:
             signal.raise_signal(signal.SIGINT)
-        update(self, t, step, dt)
+        update(self, t, step)
 
     monkeypatch.setattr(simulation._Progress, "update", ctrl_c_while_running)
     with pytest.raises(simulation.RunInterrupted, match=r"interrupted at t = .*ckpt_0001_interrupted\.h5"):

@@ -1,4 +1,10 @@
-"""Command line: ``blastfsi run``, ``blastfsi examples``, ``blastfsi kb`` (a thin layer over :mod:`blastfsi.api`)."""
+"""Command line: ``blastfsi run``, ``blastfsi examples``, ``blastfsi kb``, ``blastfsi schema`` (a thin layer over
+:mod:`blastfsi.api`).
+
+``run`` says on stderr what it is doing (the stages before the first step, then the progress: a bar on a
+terminal, plain lines in a log; ``--quiet``: nothing but errors and warnings) and prints the summary on
+stdout as tables (:func:`blastfsi.report.summary_table`), or with ``--json`` as one JSON object and nothing
+else."""
 from __future__ import annotations
 
 import argparse
@@ -7,7 +13,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from blastfsi import api
+from blastfsi import api, report
 from blastfsi.api import example_data, example_names
 from blastfsi.io.results import OutputError
 from blastfsi.scenario import ScenarioError, apply_overrides, parse, read_toml
@@ -36,6 +42,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scenario value by its dotted key, e.g. --set grid.cells=2000")
     r.add_argument("--json", action="store_true", help="print the summary as one JSON object on stdout")
+    r.add_argument("-q", "--quiet", action="store_true",
+                   help="say nothing on stderr but errors and warnings (no stages, no progress)")
     r.add_argument("--overwrite", action="store_true",
                    help="replace the results of an earlier run in --out (a blastfsi results directory only)")
     sub.add_parser("examples", help="list the shipped examples")
@@ -45,6 +53,9 @@ def _parser() -> argparse.ArgumentParser:
     kb.add_argument("--burst", choices=("free-air", "surface"), default="free-air",
                     help="spherical free-air burst or hemispherical surface burst")
     kb.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    sc = sub.add_parser("schema", help="print the JSON Schema of a scenario file (editor completion and validation)")
+    sc.add_argument("method", nargs="?", metavar="METHOD",
+                    help="the scenario method (lagrangian1d, euler, mpm, cfdmp); without it: any method")
     return p
 
 
@@ -77,6 +88,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.command == "kb":
         return _kb(args)
+    if args.command == "schema":
+        return _schema(args)
     try:
         return _run(args)
     except ScenarioError as err:
@@ -90,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
 def _run(args) -> int:
     from blastfsi.simulation import RunInterrupted, SimulationError
 
-    progress = sys.stderr.isatty() and not args.json
+    progress = not args.quiet
     try:
         if args.restart:
             if args.overrides:
@@ -112,15 +125,22 @@ def _run(args) -> int:
         print("interrupted at once: nothing more written", file=sys.stderr)
         return EXIT_INTERRUPTED
     summary = res.summary
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        for key, value in summary.items():
-            if key != "members":
-                print(f"{key:32s} {value}")
+    print(json.dumps(summary) if args.json else report.summary_table(summary))
     print(f"results written to {out}", file=sys.stderr)
     for warning in _warnings(summary):
         print(f"warning: {warning}", file=sys.stderr)
+    return 0
+
+
+def _schema(args) -> int:
+    from blastfsi.schema import scenario_schema
+
+    try:
+        schema = scenario_schema(args.method)
+    except KeyError as err:
+        print(f"error: {err.args[0]}", file=sys.stderr)
+        return EXIT_SCENARIO
+    print(json.dumps(schema, indent=2))
     return 0
 
 

@@ -4,7 +4,7 @@ A run is an ensemble (batch of size >= 1) of one method's members, advanced by
 one vmapped, jitted ``advance`` (:mod:`blastfsi.method` describes the face the
 driver calls). The driver compiles it once per method, static configuration
 and array shapes (timed as ``compile_time``), and advances the batch in chunks
-of steps between the stop times of the output schedule: field snapshots,
+of steps (calls of about a second, :func:`next_chunk`) between the stop times of the output schedule: field snapshots,
 checkpoints (any NamedTuple state, saved and restored leaf by leaf under its
 field names: restart is bit for bit) and the end. Between chunks it updates
 the progress bar and turns a fault flag into an error naming the time, step,
@@ -14,7 +14,8 @@ series rewritten at each output), so a run killed at any point leaves what it
 computed; Ctrl-C stops it cleanly between chunks (:class:`RunInterrupted`).
 At the end it writes the final summary and the plots. The summary (its
 ``status``: running, complete, interrupted or failed) times the run: ``compile_time``
-(the time loop's compilation, a grown pool's included), ``wall_time`` (the rest
+(the time loop's compilation, a grown pool's included; tracing and a load from the persistent
+compilation cache where it was compiled before, :mod:`blastfsi.runtime`), ``wall_time`` (the rest
 of the time loop: ``loop_time``, the compiled loop's calls, plus
 ``output_time``, the snapshots and checkpoints written between them, with the
 first-use compilation of their functions, plus the progress bar and checks);
@@ -23,6 +24,7 @@ was enlarged and the time loop compiled again.
 """
 from __future__ import annotations
 
+import contextvars
 import re
 import signal
 import sys
@@ -36,6 +38,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from blastfsi import method as methods
+from blastfsi import report
+from blastfsi import runtime
 from blastfsi.io import results
 from blastfsi.scenario import ScenarioBase, ScenarioError, expand, parse  # noqa: F401  (parse: for scripts)
 from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_MESSAGES, FAULT_NONE, FAULT_POOL_FULL
@@ -85,6 +89,10 @@ class Result:
         """Field arrays (NumPy) of the final state (``time=None``, from memory) or
         of the snapshot at ``time`` (read back from the results directory); see
         ``as_fields`` of :data:`blastfsi.method.Snapshot`. Ensembles: a list per member."""
+        with runtime.precision(self.scenario.numerics.precision):  # (the run's, for the method's derived fields)
+            return self._fields(time)
+
+    def _fields(self, time: float | None) -> dict | list[dict]:
         finals = _members(self.state)
         if time is None or (self.out_dir is None and time == float(np.min(np.asarray(self.state.t)))):
             return self._one_or_list([self.method.snapshot(s, setup).as_fields()
@@ -139,17 +147,19 @@ def _stack(trees: list, what: str):
     return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *trees)
 
 
-def stop_times(sc: ScenarioBase) -> tuple[list[float], list[float], list[float]]:
-    """(field snapshot times, checkpoint times, all stop times) of the output schedule. A checkpoint
+def stop_times(sc: ScenarioBase, begin: float = 0.0) -> tuple[list[float], list[float], list[float]]:
+    """(field snapshot times, checkpoint times, all stop times) of the output schedule of a run whose clock
+    starts at ``begin`` (a charge's remap time: times count from the detonation). A checkpoint
     time within round-off (1e-9 x end) of a snapshot time or the end is that time: the time loop lands
     on every stop time, and two an ulp apart would cost a step of an ulp."""
     end = sc.time.end
-    fields = [float(t) for t in np.linspace(0.0, end, sc.output.fields)] if sc.output.fields >= 2 else (
+    fields = [float(t) for t in np.linspace(begin, end, sc.output.fields)] if sc.output.fields >= 2 else (
         [end] if sc.output.fields == 1 else [])
     ckpt = []
     if sc.output.checkpoint_interval is not None:
-        n = int(np.floor(end / sc.output.checkpoint_interval + 1e-9))
-        ckpt = [_snapped(k * sc.output.checkpoint_interval, [*fields, end], 1e-9 * end) for k in range(1, n + 1)]
+        n = int(np.floor((end - begin) / sc.output.checkpoint_interval + 1e-9))
+        ckpt = [_snapped(begin + k * sc.output.checkpoint_interval, [*fields, end], 1e-9 * end)
+                for k in range(1, n + 1)]
     return fields, ckpt, sorted(set(fields) | set(ckpt) | {end})
 
 
@@ -165,7 +175,8 @@ def compiled_advance(method: methods.Method, static, state, params, *scalars):
     """The compiled batched ``advance`` for these argument types, and the
     seconds spent compiling it now (0 when it was compiled before)."""
     leaves, tree = jax.tree_util.tree_flatten((state, params))
-    key = (method.name, static, tree, tuple(jax.typeof(x) for x in leaves), tuple(type(s) for s in scalars))
+    key = (method.name, static, tree, tuple(jax.typeof(x) for x in leaves), tuple(type(s) for s in scalars),
+           jax.config.jax_enable_x64)  # (the scalars' compiled types)
     if key in _EXECUTABLES:
         return _EXECUTABLES[key], 0.0
 
@@ -180,10 +191,10 @@ def compiled_advance(method: methods.Method, static, state, params, *scalars):
         return jax.tree_util.tree_map(lambda a: a[None], out)
 
     members = leaves[0].shape[0]
-    batched = jax.jit(single if members == 1 else jax.vmap(one, in_axes=(0, 0, None, None, None, None)),
-                      donate_argnums=(0,))
+    batched = single if members == 1 else jax.vmap(one, in_axes=(0, 0, None, None, None, None))
     started = wallclock.perf_counter()
-    _EXECUTABLES[key] = batched.lower(state, params, *scalars).compile()
+    _EXECUTABLES[key] = runtime.lowered(batched, (state, params, *scalars), ("advance", method.name, static, members),
+                                        donate_argnums=(0,)).compile()
     return _EXECUTABLES[key], wallclock.perf_counter() - started
 
 
@@ -202,6 +213,18 @@ def _restore(file: Path, saved: dict, fresh):
             raise results.OutputError(f"{file}: {n} is {saved[n].dtype}{list(saved[n].shape)}, this scenario "
                                       f"needs {leaf.dtype}{list(leaf.shape)}")
     return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(fresh), [jnp.asarray(saved[n]) for n, _ in names])
+
+
+FIRST_CHUNK = 10  # steps of the first call of the compiled time loop; the next ones aim at CHUNK_SECONDS
+CHUNK_SECONDS = 1.0  # wall-clock seconds of a call: the progress and Ctrl-C act between calls
+
+
+def next_chunk(steps: int, seconds: float, cap: int) -> int:
+    """Steps of the next call of the time loop, after one of ``steps`` steps took ``seconds``: as many as
+    take CHUNK_SECONDS at that rate, at most 4 x ``steps`` (the first calls are short) and ``cap``."""
+    steps = max(steps, 1)
+    aim = steps * CHUNK_SECONDS / seconds if seconds > 0.0 else 4.0 * steps
+    return int(max(1, min(aim, 4 * steps, cap)))
 
 
 GROWTH = 1.25  # a full particle pool grows to GROWTH x (the particles it needed), in whole thousands
@@ -244,26 +267,51 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     :func:`blastfsi.scenario.expand`) as one batched computation. With
     ``restart``, ``out`` is an existing results directory whose latest readable
     checkpoint is continued; ``out=None`` writes nothing. Ctrl-C while writing
-    ``out`` raises :class:`RunInterrupted` once the run is saved."""
-    sc, members, member_scs = expand(data)
+    ``out`` raises :class:`RunInterrupted` once the run is saved. With ``progress`` it says on
+    stderr what it is doing (:class:`_Progress`; set-up code adds lines with :func:`announce`). The run computes in
+    ``numerics.precision`` and keeps its compiled time loop in the persistent cache
+    (:mod:`blastfsi.runtime`)."""
+    bar = _Progress(progress)
+    reporting = _REPORTING.set(bar) if progress else None  # (a nested run, e.g. a charge's 1D detonation, is silent)
+    try:
+        bar.stage("validating the scenario")
+        sc, members, member_scs = expand(data)
+        with runtime.precision(sc.numerics.precision), runtime.compilation_cache():  # (both restored after the run)
+            return _run(sc, members, member_scs, out, overwrite=overwrite, bar=bar, restart=restart,
+                        chunk_steps=chunk_steps)
+    finally:
+        if reporting is not None:
+            _REPORTING.reset(reporting)
+
+
+def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | None, *, overwrite: bool,
+         bar: _Progress, restart: bool, chunk_steps: int) -> Result:
+    """:func:`run` of the validated scenario ``sc`` (its members' overrides and scenarios), in its precision."""
     method = methods.get(sc.method)
-    setups = [method.build(s) for s in member_scs]
-    dtype = jnp.float32 if sc.numerics.precision == "float32" or not jax.config.jax_enable_x64 else jnp.float64
+    setups = []
+    for k, s in enumerate(member_scs):
+        n = len(member_scs)
+        if n == 1 or k % max(n // 10, 1) == 0 or k == n - 1:
+            bar.stage(f"building the {sc.method} set-up" + (f": member {k + 1} of {n}" if n > 1 else ""))
+        setups.append(method.build(s))
+    dtype = jnp.float64 if sc.numerics.precision == "float64" else jnp.float32
     statics = {method.static(setup, s) for setup, s in zip(setups, member_scs)}
     if len(statics) != 1:
         raise ScenarioError(f"all ensemble members must share the static configuration compiled into the time loop; "
                             f"got {sorted(map(repr, statics))}")
     static = statics.pop()
     n_samples = sc.output.history_samples
-    sample_interval = sc.time.end / (n_samples - 1)
     state = _stack([method.initial_state(setup, s, n_samples, dtype) for setup, s in zip(setups, member_scs)], "state")
     methods.check_state(state)
+    begin = float(np.min(np.asarray(state.t)))  # the clock's start: 0, or a charge's remap time
+    sample_interval = (sc.time.end - begin) / (n_samples - 1)
     params = _stack([method.params(setup, dtype) for setup in setups], "params")
-    field_times, ckpt_times, stops = stop_times(sc)
+    field_times, ckpt_times, stops = stop_times(sc, begin)
 
     last_ckpt = None
     if restart:
         last_ckpt, setups, state = _restored(out, method, setups, state)
+        bar.stage(f"continuing from {last_ckpt} (t = {report.quantity(float(np.min(np.asarray(state.t))), 's')})")
         static = method.static(setups[0], member_scs[0])
     elif out is not None:
         results.prepare_directory(out, overwrite)
@@ -274,9 +322,13 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     scalars = (chunk_steps, sample_interval, sc.time.dt_min_fraction)
     with _CtrlC(enabled=out is not None) as ctrl_c:  # (from the compilation on: Ctrl-C while compiling
         #                                               stops before the first chunk)
+        bar.stage(f"compiling the time loop ({setups[0].cells} cells" + (f" x {len(setups)} members)" if
+                                                                         len(setups) > 1 else ")"))
         advance, compile_time = compiled_advance(method, static, state, params, stops[-1], *scalars)
-
-        bar = _Progress(sc.time.end, enabled=progress)
+        bar.stage(f"compiled in {report.duration(compile_time)}" if compile_time else
+                  "time loop compiled earlier in this process: reused")
+        bar.start(sc.time.end, t_start, int(np.max(np.asarray(state.step))))
+        chunk = min(FIRST_CHUNK, chunk_steps)  # steps of the next call of the time loop (next_chunk)
         started, grow_compile, growths = wallclock.perf_counter(), 0.0, 0
         spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots, checkpoints, history, summary
 
@@ -286,8 +338,14 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
             spent[part] += wallclock.perf_counter() - t0
             return value
 
-        def advanced(state, t_stop):  # the time loop's call, waited for
-            return jax.block_until_ready(advance(state, params, t_stop, *scalars))
+        def advanced(state, t_stop):  # the time loop's call of at most `chunk` steps, waited for; sizes the next
+            nonlocal chunk
+            before, t0 = int(np.max(np.asarray(state.step))), wallclock.perf_counter()
+            steps = max(1, min(chunk, sc.time.max_steps - before))
+            state = jax.block_until_ready(advance(state, params, t_stop, steps, *scalars[1:]))
+            chunk = next_chunk(int(np.max(np.asarray(state.step))) - before, wallclock.perf_counter() - t0,
+                               chunk_steps)
+            return state
 
         def summary(host, status: str) -> list[dict]:  # of each member (host: the batched state on the host)
             timing = {"wall_time": wallclock.perf_counter() - started - grow_compile,  # (the time loop only)
@@ -302,16 +360,16 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                 timed("output", rec.checkpoint, ckpt_times.index(t_stop) + 1, t_stop, host)
 
         try:
-            if out is not None and not restart and field_times and field_times[0] == 0.0:
-                outputs(0.0, jax.device_get(state))
+            if out is not None and not restart and field_times and field_times[0] == begin:
+                outputs(begin, jax.device_get(state))
             for t_stop in (t for t in stops if t > t_start):
                 while not ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
                     state = timed("loop", advanced, state, t_stop)
                     grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
                     if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
                         setups, state = grown
-                        bar.note(f"t = {float(np.min(np.asarray(state.t))):.4e} s: particle pool full, grown to "
-                                 f"{_pool_size(method, state)} slots (time loop compiled again)")
+                        bar.stage(f"t = {report.quantity(float(np.min(np.asarray(state.t))), 's')}: particle pool "
+                                  f"full, grown to {_pool_size(method, state)} slots (compiling the time loop again)")
                         static = method.static(setups[0], member_scs[0])
                         advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
                         compile_time += more
@@ -321,8 +379,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                     stop = _stop_reason(state, method, setups, sc)
                     if stop is not None:  # (the history up to it is kept, as are the snapshots and checkpoints)
                         raise SimulationError(f"{stop}; {rec.failed(jax.device_get(state), stop)}")
-                    bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))),
-                               float(np.min(np.asarray(state.dt_prev))))
+                    bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))))
                 if ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
                     break
                 if out is None:
@@ -334,7 +391,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                 if t_stop < stops[-1]:
                     timed("output", rec.update, host, setups, _combined(summary(host, "running"), members))
         finally:
-            bar.close()
+            bar.finish()
 
         host = jax.device_get(state)
         t_now = float(np.min(host.t))
@@ -347,6 +404,7 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
                 rec.checkpoint(sum(t <= t_now for t in ckpt_times), t_now, host, "_interrupted")
             rec.update(host, setups, result.summary)
             if sc.output.plots and not interrupted:
+                bar.stage("writing the plots")
                 method.plots(out / "plots", sc, setups, result.histories, members,
                              [method.snapshot(f, u) for f, u in zip(_members(host), setups)])
     if interrupted:
@@ -494,28 +552,77 @@ class _CtrlC:
 
 
 class _Progress:
-    """Progress bar (simulated time, step, dt, ETA) on a terminal; silent otherwise."""
+    """What a run says on stderr when ``enabled`` (silent otherwise): stage lines with the wall-clock time
+    since it started (:meth:`stage`, also :func:`announce`), then from :meth:`start` to :meth:`finish` the
+    progress after each call of the time loop: simulated time, step, the time step (the mean over the call,
+    the stable one: :func:`blastfsi.report.shown_step`), steps per second and the ETA from the
+    simulated-time rate, both averaged over the last ~20 s of wall-clock time
+    (:func:`blastfsi.report.decayed`). On a terminal a bar; otherwise (a log) a plain line at each tenth of
+    the run and at least every minute."""
 
-    def __init__(self, end: float, enabled: bool):
-        self._bar = None
-        if enabled:
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    def __init__(self, enabled: bool):
+        self.enabled, self.started = enabled, wallclock.perf_counter()
+        self._bar = self._end = self._last = self._plain = self._dt = None
+        self._totals = (0.0, 0.0, 0.0)  # simulated time, steps and wall-clock time, decayed (report.decayed)
 
-            self._bar = Progress(TextColumn("[bold]t = {task.fields[t]:.4e} s"), BarColumn(),
-                                 TextColumn("step {task.fields[step]}  dt = {task.fields[dt]:.2e} s"),
-                                 TimeElapsedColumn(), TimeRemainingColumn(), transient=False)
-            self._task = self._bar.add_task("run", total=end, t=0.0, step=0, dt=0.0)
+    def stage(self, message: str) -> None:
+        if not self.enabled:
+            return
+        line = report.stage_line(wallclock.perf_counter() - self.started, message)
+        if self._bar is not None:
+            self._bar.console.print(line, markup=False, highlight=False)
+        else:
+            print(line, file=sys.stderr, flush=True)
+
+    def start(self, end: float, t: float, step: int) -> None:
+        """The time loop starts at simulated time ``t``, step ``step``, and runs to ``end``."""
+        self._end, self._last = end, (wallclock.perf_counter(), t, step)
+        self._plain = (t / end, self._last[0])  # (fraction of the run, wall-clock time) of the last plain line
+        if self.enabled and sys.stderr.isatty():
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self._bar = Progress(TextColumn("{task.fields[head]}", markup=False), BarColumn(),
+                                 TextColumn("{task.percentage:>3.0f} %"),
+                                 TextColumn("{task.fields[tail]}", markup=False), TimeElapsedColumn(),
+                                 console=Console(stderr=True), transient=False)
+            head, tail = report.progress_parts(t, end, step, None, None, None)
+            self._task = self._bar.add_task("run", total=end, completed=t, head=head, tail=tail)
             self._bar.start()
 
-    def update(self, t: float, step: int, dt: float) -> None:
+    def update(self, t: float, step: int) -> None:
+        """After a call of the time loop: simulated time ``t`` (the least over members), step (the most)."""
+        now = wallclock.perf_counter()
+        wall0, t0, step0 = self._last
+        self._last = (now, t, step)
+        if not self.enabled or now <= wall0:
+            return
+        self._totals = tuple(report.decayed(total, amount, now - wall0)
+                             for total, amount in zip(self._totals, (t - t0, step - step0, now - wall0)))
+        sim, steps, wall = self._totals
+        self._dt = report.shown_step(self._dt, t - t0, step - step0)
+        shown = (t, self._end, step, self._dt, steps / wall, report.remaining(t, self._end, sim / wall))
         if self._bar is not None:
-            self._bar.update(self._task, completed=t, t=t, step=step, dt=dt)
+            head, tail = report.progress_parts(*shown)
+            self._bar.update(self._task, completed=t, head=head, tail=tail)
+        elif report.plain_due(t / self._end, self._plain[0], now - self._plain[1]):
+            self._plain = (t / self._end, now)
+            self.stage(report.progress_line(*shown))
 
-    def note(self, message: str) -> None:
-        """A line above the bar (on a terminal only, as the bar)."""
-        if self._bar is not None:
-            self._bar.console.print(message)
-
-    def close(self) -> None:
+    def finish(self) -> None:
+        """The time loop is over: the bar stops (stage lines go on as plain lines)."""
         if self._bar is not None:
             self._bar.stop()
+            self._bar = None
+
+
+_REPORTING: contextvars.ContextVar[_Progress | None] = contextvars.ContextVar("blastfsi_reporting", default=None)
+
+
+def announce(message: str) -> None:
+    """Say on stderr, as a stage of the run in progress, what its set-up is doing now (e.g. the 1D
+    detonation of a charge, which may take a minute): a line with the elapsed wall-clock time; nothing when
+    no run reports its progress (:func:`run` with ``progress=False``, the Python API's default)."""
+    bar = _REPORTING.get()
+    if bar is not None:
+        bar.stage(message)

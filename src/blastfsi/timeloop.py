@@ -27,10 +27,10 @@ at omega dt = 1 under random shortening of one step in seven gains 1e5 in 2000
 cycles.)
 
 History samples never shorten a step: row k is the history at the sample time
-k * sample_interval, interpolated linearly in time between the rows at the
-start and the end of the step that reaches it (:func:`interpolated`), both
-computed only for such a step; a step may reach several. The first row (t = 0)
-is the initial state's, and the last, at the end (a stop time), the final
+t_0 + k * sample_interval (t_0: the time of the first row, the clock's start),
+interpolated linearly in time between the rows at the start and the end of the
+step that reaches it (:func:`interpolated`), both computed only for such a
+step; a step may reach several. The first row (t_0) is the initial state's, and the last, at the end (a stop time), the final
 state's, both exact. A quantity linear in time within a step (time, an impulse
 or work accumulated with the step's rate) is sampled exactly.
 
@@ -91,10 +91,10 @@ def interpolated(row_a, row_b, t):
 
 
 def recorded(hist, first, stop, row_a, row_b, sample_interval):
-    """``hist`` with rows ``first`` .. ``stop - 1``, those of the sample times a
-    step from row_a to row_b reached, interpolated in time."""
+    """``hist`` with rows ``first`` .. ``stop - 1``, those of the sample times t_0 + k * sample_interval
+    (t_0 = hist[0, 0], the first row's time) a step from row_a to row_b reached, interpolated in time."""
     def one(k, hist):
-        return hist.at[k].set(interpolated(row_a, row_b, k.astype(hist.dtype) * sample_interval))
+        return hist.at[k].set(interpolated(row_a, row_b, hist[0, 0] + k.astype(hist.dtype) * sample_interval))
 
     return jax.lax.fori_loop(first, stop, one, hist)
 
@@ -132,7 +132,7 @@ def run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction, *, s
 
         def go(st):
             dt, t_new = step_to(st.t, t_stop, dt_stable)
-            reached = samples_reached(t_new, sample_interval, n_samples)
+            reached = samples_reached(t_new - st.hist[0, 0], sample_interval, n_samples)
             samples = reached > st.hist_next  # the step reaches samples: the rows at its start and end
             row_a = jax.lax.cond(samples, lambda: row(st), lambda: jnp.zeros(st.hist.shape[1:], st.hist.dtype))
             new = step(st, dt)._replace(t=t_new, dt_prev=dt, step=st.step + 1)
