@@ -1,4 +1,4 @@
-"""Grid and particle snapshots + XDMF series, read back with VTK's own XDMF reader (ParaView's engine).
+"""Grid and particle snapshots + XDMF indices, read back with VTK's own XDMF reader (ParaView's engine) and meshio.
 
 Field values are analytic functions of position that vary differently along x, y and z; every cell (point)
 VTK reports is checked against the function evaluated at the cell centre (point) *VTK* computes, so a swap
@@ -8,6 +8,7 @@ those coordinates (a few ulp of |x| ~ 1, amplified by the field's gradients ~ 10
 import re
 
 import matplotlib.image as mpimg
+import meshio
 import numpy as np
 import pytest
 from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -18,9 +19,9 @@ from vtkmodules.vtkFiltersCore import vtkCellCenters
 from vtkmodules.vtkIOXdmf2 import vtkXdmfReader
 
 from blastfsi.io import results
-from blastfsi.io.fields import (read_grid_snapshot, read_particle_snapshot, write_coupled_snapshot, write_grid_series,
-                                write_grid_snapshot, write_particle_series, write_particle_snapshot)
-from blastfsi.method import Coupled, Grid, Particles
+from blastfsi.io.fields import (read_grid_snapshot, read_particle_snapshot, write_coupled_snapshot, write_grid_mesh,
+                                write_grid_series, write_grid_snapshot, write_particle_series, write_particle_snapshot)
+from blastfsi.method import Coupled, Grid, Particles, Polyline
 from blastfsi.plotting.fields import field_image, plot_particle_damage, plot_pressure_field
 
 TOL = dict(rtol=1e-12, atol=1e-12)
@@ -230,6 +231,10 @@ def test_particles_3d_full_tensor(tmp_path):
     (lambda d: write_particle_snapshot(d / "a.h5", 0.0, np.zeros((3, 2)), {"coordinates": np.zeros(3)}),
      "field name"),
     (lambda d: write_particle_series(d / "a.xdmf", [("a.h5", 0.0, 0)], {}), "particle"),
+    (lambda d: write_particle_snapshot(d / "a.h5", 0.0, np.zeros((3, 2)), {"connectivity": np.zeros(3)}),
+     "field name"),
+    (lambda d: write_grid_mesh(d / "m.h5", (2, 0), (0.0, 0.0), 1.0), "shape"),
+    (lambda d: write_grid_mesh(d / "m.h5", (2, 2), (0.0,), 1.0), "shape"),
 ])
 def test_bad_input_names_the_parameter(tmp_path, call, message):
     with pytest.raises(ValueError, match=message):
@@ -369,9 +374,12 @@ def test_coupled_2d_ensemble_series_varying_particle_count(tmp_path):
     for k in range(2):
         results.write_series(out, k, list(enumerate(times)), written[k][-1])
         check_coupled_series(out, written[k], times, k, offset=10.0 * k)
-    # one HDF5 file per member and snapshot, one XDMF per member
+    # one HDF5 file per member and snapshot, one series per member, one meshio index per snapshot part, one
+    # file of grid cells per member
     assert sorted(f.name for f in (out / "fields").iterdir()) == sorted(
-        [f"member{k}_{i:04d}.h5" for k in range(2) for i in range(3)] + ["member0.xdmf", "member1.xdmf"])
+        [f"member{k}_{i:04d}{part}" for k in range(2) for i in range(3)
+         for part in (".h5", "_grid.xdmf", "_particles.xdmf")] + [f"member{k}{end}" for k in range(2)
+                                                                 for end in (".xdmf", ".mesh.h5")])
     # the API's field dict: the grid's entries and the particles' prefixed particle_
     snap = results.read_snapshot(out, "coupled", 1, 1)
     f = snap.as_fields()
@@ -427,3 +435,124 @@ def test_tracer_histories_plot(tmp_path):
     assert picture.ndim == 3 and picture.shape[0] > 300 and picture.shape[1] > 400
     with pytest.raises(KeyError, match="tracer1"):
         tracer_histories(png, [hist], [[0.0, 0.105], [0.1, 0.105]], ("x", "y"))
+
+
+# ----------------------------------------------------------------------- meshio: every snapshot, every kind
+def read_mesh(out, index, part=""):
+    """meshio's reading of snapshot ``index`` of member 0 (its own XDMF index)."""
+    return meshio.read(out / "fields" / f"member0_{index:04d}{'_' + part if part else ''}.xdmf")
+
+
+def check_meshio_grid(mesh, grid: Grid, t):
+    """Cells of the right type and number, each cell's fields = the analytic ones at its centroid (computed
+    from meshio's points and connectivity, so a wrong node or cell order fails)."""
+    ndim, shape = len(grid.edges), [len(e) - 1 for e in grid.edges]
+    (block,) = mesh.cells
+    assert block.type == ("line", "quad", "hexahedron")[ndim - 1] and block.data.shape == (np.prod(shape), 2 ** ndim)
+    assert len(mesh.points) == np.prod([n + 1 for n in shape])
+    corners = mesh.points[block.data]
+    np.testing.assert_allclose(np.ptp(corners, axis=1)[:, :ndim], np.broadcast_to(
+        [e[1] - e[0] for e in grid.edges], (len(corners), ndim)), **TOL)  # every cell one cell wide along each axis
+    c = corners.mean(axis=1)
+    x, y, z = (*c[:, :ndim].T, *[np.zeros(len(c))] * (3 - ndim))
+    np.testing.assert_allclose(mesh.cell_data["pressure"][0], scalar_field(x, y, z, t), **TOL)
+    velocity = mesh.cell_data["velocity"][0]
+    assert velocity.shape == (len(c), 3)
+    np.testing.assert_allclose(velocity[:, :ndim], vector_field(x, y, z)[:, :ndim], **TOL)
+
+
+def grid_member(origin, spacing, shape, t):
+    centres = cell_centres(origin, spacing, shape)
+    x, y, z = (*centres, *[np.zeros(shape)] * (3 - len(shape)))
+    edges = tuple(o + d * np.arange(n + 1) for o, d, n in zip(origin, spacing, shape))
+    return Grid(edges=edges, cell_fields={"pressure": scalar_field(x, y, z, t),
+                                          "velocity": vector_field(x, y, z)[..., :len(shape)]})
+
+
+@pytest.mark.parametrize("origin, spacing, shape", [((3.0,), (0.5,), (7,)), ((-1.0, 2.0), (0.25, 0.125), (6, 3)),
+                                                    ((0.5, -1.0, 2.0), (0.1, 0.2, 0.3), (5, 4, 3))])
+def test_meshio_reads_grid_time_series(tmp_path, origin, spacing, shape):
+    out = results.prepare_directory(tmp_path / "out", overwrite=False)
+    times = [0.0, 2.5e-4, 1.0e-3]
+    written = [grid_member(origin, spacing, shape, t) for t in times]
+    for index, (t, grid) in enumerate(zip(times, written)):
+        results.write_snapshot(out, index, t, [grid])
+    results.write_series(out, 0, list(enumerate(times)), written[-1])
+    assert Series(out / "fields" / "member0.xdmf").times == times  # the ParaView series is still whole
+    for index, (t, grid) in enumerate(zip(times, written)):
+        check_meshio_grid(read_mesh(out, index), grid, t)
+        back = results.read_snapshot(out, "grid", index, 0)  # the flat storage reads back as written
+        np.testing.assert_array_equal(back.cell_fields["pressure"], grid.cell_fields["pressure"])
+    if len(shape) == 3:  # ParaView opens a snapshot's own index too (an unstructured grid of hexahedra)
+        reader = vtkXdmfReader()
+        reader.SetFileName(str(out / "fields" / "member0_0001.xdmf"))
+        reader.Update()
+        data = reader.GetOutputDataObject(0)
+        c = vtk_cell_centres(data)
+        np.testing.assert_allclose(cell_array(data, "pressure"), scalar_field(*c.T, times[1]), **TOL)
+
+
+def test_meshio_reads_moving_particles(tmp_path):
+    rng = np.random.default_rng(5)
+    out = results.prepare_directory(tmp_path / "out", overwrite=False)
+    times, counts = [0.0, 1e-4], [4, 9]  # the cloud moves and grows
+    written = []
+    for index, (t, n) in enumerate(zip(times, counts)):
+        xy = rng.uniform(-1.0, 1.0, (n, 2))
+        s = rng.normal(size=(n, 2, 2))
+        snap = Particles(positions=xy, point_fields={"mass": 1.0 + xy[:, 0] ** 2, "velocity": 3.0 * xy[:, ::-1],
+                                                     "stress": s})
+        results.write_snapshot(out, index, t, [snap])
+        written.append(snap)
+    results.write_series(out, 0, list(enumerate(times)), written[-1])
+    assert Series(out / "fields" / "member0.xdmf").times == times
+    for index, snap in enumerate(written):
+        mesh = read_mesh(out, index)
+        n = len(snap.positions)
+        assert mesh.cells[0].type == "vertex" and mesh.cells[0].data.ravel().tolist() == list(range(n))
+        np.testing.assert_array_equal(mesh.points, np.pad(snap.positions, ((0, 0), (0, 1))))
+        np.testing.assert_array_equal(mesh.point_data["mass"], snap.point_fields["mass"])
+        np.testing.assert_array_equal(mesh.point_data["velocity"][:, :2], snap.point_fields["velocity"])
+        stress = mesh.point_data["stress"].reshape(n, 3, 3)
+        np.testing.assert_array_equal(stress[:, :2, :2], snap.point_fields["stress"])
+
+
+def test_meshio_reads_coupled_grid_and_particles(tmp_path):
+    rng = np.random.default_rng(6)
+    origin, spacing, shape = (0.0, 1.0, -0.5), (0.25, 0.5, 0.125), (4, 3, 2)
+    out = results.prepare_directory(tmp_path / "out", overwrite=False)
+    times, counts = [1e-4, 3e-4], [5, 0]  # the second snapshot without particles
+    written = [coupled_member(origin, spacing, shape, t, n, rng) for t, n in zip(times, counts)]
+    for index, (t, snap) in enumerate(zip(times, written)):
+        results.write_snapshot(out, index, t, [snap])
+    results.write_series(out, 0, list(enumerate(times)), written[-1])
+    mesh = read_mesh(out, 0, "grid")
+    c = mesh.points[mesh.cells[0].data].mean(axis=1)
+    np.testing.assert_allclose(mesh.cell_data["pressure"][0], scalar_field(*c.T, times[0]), **TOL)
+    np.testing.assert_allclose(mesh.cell_data["stress"][0][:, [1, 3]], c[:, :2], **TOL)
+    cloud = read_mesh(out, 0, "particles")
+    np.testing.assert_array_equal(cloud.points, written[0].particles.positions)
+    np.testing.assert_array_equal(cloud.point_data["pressure"], written[0].particles.point_fields["pressure"])
+    check_meshio_grid(read_mesh(out, 1, "grid"), Grid(written[1].grid.edges, {
+        "pressure": written[1].grid.cell_fields["pressure"], "velocity": written[1].grid.cell_fields["velocity"]}),
+        times[1])
+    assert not (out / "fields" / "member0_0001_particles.xdmf").exists()  # no particle: no particle index
+
+
+def test_meshio_reads_moving_1d_mesh(tmp_path):
+    out = results.prepare_directory(tmp_path / "out", overwrite=False)
+    times = [0.0, 1e-3]
+    written = []
+    for index, t in enumerate(times):
+        nodes = np.linspace(0.0, 1.0, 6) * (1.0 + 10.0 * t) ** np.linspace(1.0, 2.0, 6)  # the Lagrangian mesh moves
+        snap = Polyline(nodes=nodes, node_fields={"velocity": 2.0 * nodes},
+                        cell_fields={"pressure": 1e5 * (1.0 + np.diff(nodes))})
+        results.write_snapshot(out, index, t, [snap])
+        written.append(snap)
+    results.write_series(out, 0, list(enumerate(times)), written[-1])
+    for index, snap in enumerate(written):
+        mesh = read_mesh(out, index)
+        assert mesh.cells[0].type == "line" and len(mesh.cells[0].data) == 5
+        np.testing.assert_array_equal(mesh.points[:, 0], snap.nodes)  # this snapshot's node positions
+        np.testing.assert_array_equal(mesh.point_data["velocity"], snap.node_fields["velocity"])
+        np.testing.assert_array_equal(mesh.cell_data["pressure"][0], snap.cell_fields["pressure"])

@@ -1,34 +1,48 @@
-"""Multi-dimensional field output that ParaView opens as a time series: Eulerian grids and MPM particles.
+"""Multi-dimensional field output that ParaView and meshio open: Eulerian grids and MPM particles.
 
-Format: one HDF5 file per snapshot (heavy data) + one XDMF 3 temporal collection (the time index), the same
-pair the 1D output in ``results.py`` uses. Chosen over VTKHDF because (a) the index is a small text file
-rewritten from the list of snapshots, so a restart or a crash never corrupts earlier snapshots (a transient
-VTKHDF file is one growing HDF5 file); (b) the pip ``vtk`` wheel reads the whole XDMF time series
-(``vtkXdmfReader``: time values included), while a per-snapshot ``.vtkhdf`` + ``.series``/``.pvd`` index is
-only read as a series by ParaView itself, so the time index could not be checked with a real reader;
-(c) the snapshot files stay plain HDF5 that h5py users read directly.
+Format: one HDF5 file per snapshot (heavy data) + XDMF 3 text indices to it. Two indices, because no one XDMF
+layout is read by both ParaView and meshio:
 
-Grids use a ``3DCoRectMesh`` topology with ``ORIGIN_DXDYDZ`` geometry (no cell connectivity is stored).
-Conventions, all checked by ``tests/test_io_fields.py`` with ``vtkXdmfReader``:
+- the *series* (``write_*_series``): one XDMF temporal collection per member, what ParaView opens as a time
+  series. Grids are a structured ``3DCoRectMesh`` (no cell connectivity stored; ParaView gets image data).
+  meshio cannot read it: ``meshio.read`` takes one Uniform grid only ("Unknown section 'Grid'" on a
+  collection), and ``meshio.xdmf.TimeSeriesReader`` needs a mesh with explicit connectivity that does not move.
+- the *snapshot* index (``write_*_xdmf``): one XDMF file per snapshot holding one Uniform grid with explicit
+  cells, what ``meshio.read`` opens (ParaView too). Grids are lines / quadrilaterals / hexahedra whose points
+  and connectivity are written once per member (:func:`write_grid_mesh`), so the snapshots are not
+  enlarged; particles are a ``Polyvertex`` topology whose connectivity (0 .. n-1) is stored in the snapshot.
 
-- XDMF orders CoRectMesh dimensions, origin and spacing z, y, x (slowest to fastest), and both ParaView
-  readers (``XDMF Reader`` and ``Xdmf3Reader``, VTK ``IO/Xdmf2``/``IO/Xdmf3``) reverse them into VTK's x, y,
-  z. Our arrays are indexed ``[i, j, k]`` = (x, y, z), so each dataset is stored with its spatial axes
-  reversed (``[k, j, i]``, x fastest) and the XML lists z, y, x: ParaView shows x as x.
-- 1D and 2D grids are written as 3D grids one cell thick in the missing directions (thickness = the cell
+HDF5 + XDMF was chosen over VTKHDF because (a) the indices are small text files rewritten from the list of
+snapshots, so a restart or a crash never corrupts earlier snapshots (a transient VTKHDF file is one growing
+HDF5 file); (b) the pip ``vtk`` wheel reads the whole XDMF time series (``vtkXdmfReader``: time values
+included), so the time index is checked with a real reader; (c) the snapshot files stay plain HDF5 that h5py
+users read directly.
+
+Conventions, all checked by ``tests/test_io_fields.py`` with ``vtkXdmfReader`` and ``meshio``:
+
+- Cell fields are stored flat, one row per cell, x fastest then y then z (cell ``(i, j, k)`` is row
+  ``i + nx (j + ny k)``), with the cell counts (x, y, z) in the attribute ``shape``: the row order of the
+  snapshot index's cells, which meshio needs one row per cell. The series declares the same datasets with
+  dimensions z, y, x, the order XDMF gives CoRectMesh dimensions, origin and spacing in (slowest to fastest),
+  which both ParaView readers (``XDMF Reader`` and ``Xdmf3Reader``, VTK ``IO/Xdmf2``/``IO/Xdmf3``) reverse
+  into VTK's x, y, z: ParaView shows x as x.
+- In the series, 1D and 2D grids are 3D grids one cell thick in the missing directions (thickness = the cell
   size along x, origin 0 there). A ``2DCoRectMesh`` would be placed in VTK's y-z plane by both readers
-  (x shown as y), and a grid one *node* thick loses its cell data in ``vtkXdmfReader``.
+  (x shown as y), and a grid one *node* thick loses its cell data in ``vtkXdmfReader``. In the snapshot index
+  they are lines along x / quadrilaterals in the plane z = 0.
 - Vectors are stored with 3 components (zero-padded), tensors with 9 (row-major xx, xy, xz, yx, ..., zz;
   zero-padded from 2x2 / 1x1), the widths ParaView's glyph and tensor filters expect. We store all 9
   components rather than 6-component Voigt because XDMF ``Tensor6`` (xx, xy, xz, yy, yz, zz) and VTK's
   symmetric order (xx, yy, zz, xy, yz, xz) disagree; 9 components are read the same way everywhere.
-- Particles are an XDMF ``Polyvertex`` topology with node-centred data; coordinates are padded to 3 with
-  zeros. A snapshot needs at least one particle: ``vtkXdmfReader`` fails on an empty geometry (a coupled
-  snapshot's particles may be none: that time step then shows the grid alone).
+- Particles are an XDMF ``Polyvertex`` topology (one vertex cell per particle) with node-centred data;
+  coordinates are padded to 3 with zeros. An index needs at least one particle: ``vtkXdmfReader`` fails on
+  an empty geometry (a coupled snapshot's particles may be none: that time step then shows the grid alone,
+  and the snapshot has no particle index).
 - Grid + particles (a coupled Eulerian-MPM run): ONE HDF5 file per snapshot with a group ``grid`` laid out
   as a grid file and a group ``particles`` laid out as a particle file (one file, so a snapshot is written
-  or missing as a whole), and one temporal collection whose every step is a ``Spatial`` collection of the
-  two Uniform grids; the reader gives a multiblock dataset of two blocks (grid, particles) per time.
+  or missing as a whole). In the series every step is a ``Spatial`` collection of the two Uniform grids (the
+  reader gives a multiblock dataset of two blocks, grid and particles, per time); the snapshot index is one
+  file per part.
 
 Each snapshot file also records, as attributes, what is needed to undo the padding (``read_*_snapshot``).
 """
@@ -46,6 +60,9 @@ KIND_COMPONENTS = {"scalar": 1, "vector": 3, "tensor": 9}  # components stored o
 _DTYPES = {4: np.float32, 8: np.float64}  # XDMF Precision (bytes) -> stored dtype
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 COORDINATES = "coordinates"  # particle-snapshot dataset holding the (n, 3) positions
+CONNECTIVITY = "connectivity"  # particle-snapshot dataset (n, 1): particle p is vertex cell p (snapshot index)
+POINTS = "points"  # grid-mesh dataset holding the (nodes, 3) node coordinates (CONNECTIVITY: the cells' nodes)
+_PARTICLE_DATASETS = (COORDINATES, CONNECTIVITY)  # a particle snapshot's datasets that are not fields
 GRID_GROUP, PARTICLES_GROUP = "grid", "particles"  # the two HDF5 groups of a coupled snapshot (and XDMF grid names)
 
 
@@ -156,22 +173,32 @@ def _unpadded(stored: np.ndarray, lead: int, value_shape: tuple[int, ...]) -> np
     return stored.reshape(stored.shape[:lead] + (3, 3))[..., :d, :d]
 
 
-def _to_xdmf_order(array: np.ndarray, ndim: int) -> np.ndarray:
-    """Spatial axes (x[, y[, z]]) -> (z, y, x), missing ones as length 1, value axis kept last."""
+def _to_rows(array: np.ndarray, ndim: int) -> np.ndarray:
+    """Spatial axes (x[, y[, z]]) -> one row per cell, x fastest; the value axis (if any) kept last."""
     order = tuple(reversed(range(ndim))) + tuple(range(ndim, array.ndim))
-    out = np.transpose(array, order)
-    return np.ascontiguousarray(out.reshape((1,) * (3 - ndim) + out.shape))
+    return np.ascontiguousarray(np.transpose(array, order)).reshape((-1,) + array.shape[ndim:])
 
 
-def _from_xdmf_order(stored: np.ndarray, ndim: int) -> np.ndarray:
-    out = stored.reshape(stored.shape[3 - ndim:])
+def _from_rows(stored: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """Inverse of :func:`_to_rows` for a grid of ``shape`` cells (x[, y[, z]])."""
+    ndim = len(shape)
+    out = stored.reshape(tuple(reversed(shape)) + stored.shape[1:])
     return np.transpose(out, tuple(reversed(range(ndim))) + tuple(range(ndim, out.ndim)))
 
 
 # --------------------------------------------------------------------------------------------- XDMF text
-def _data_item(dims, reference: str, precision: int) -> str:
-    return (f'<DataItem Dimensions="{" ".join(str(int(n)) for n in dims)}" NumberType="Float" '
+def _data_item(dims, reference: str, precision: int, number_type: str = "Float") -> str:
+    return (f'<DataItem Dimensions="{" ".join(str(int(n)) for n in dims)}" NumberType="{number_type}" '
             f'Precision="{precision}" Format="HDF">{reference}</DataItem>')
+
+
+def _index_dtype(largest: int):
+    """Integer type of connectivity whose largest entry is ``largest``: int32 while it fits, else int64."""
+    return np.int32 if largest < 2 ** 31 else np.int64
+
+
+def _index_item(dims, reference: str, largest: int) -> str:
+    return _data_item(dims, reference, np.dtype(_index_dtype(largest)).itemsize, "Int")
 
 
 def _h5_location(h5_name, group: str = "") -> str:
@@ -198,15 +225,18 @@ def _uniform(name: str, body: str, time=None) -> str:
     return f'<Grid Name="{name}" GridType="Uniform">{"" if time is None else _time_element(time)}{body}</Grid>'
 
 
-def _write_collection(xdmf_path: Path, grids: list[str]) -> None:
-    """Write the temporal collection atomically (ParaView may be reading the previous one)."""
+def _write_domain(xdmf_path, grid: str) -> None:
+    """Write an XDMF file of one top-level grid atomically (ParaView may be reading the previous one)."""
     xdmf_path = Path(xdmf_path)
-    steps = "".join(f"{grid}\n" for grid in grids)
-    text = ('<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain><Grid Name="series" GridType="Collection" '
-            f'CollectionType="Temporal">\n{steps}</Grid></Domain></Xdmf>\n')
     tmp = xdmf_path.with_name(xdmf_path.name + ".tmp")
-    tmp.write_text(text)
+    tmp.write_text(f'<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain>{grid}</Domain></Xdmf>\n')
     tmp.replace(xdmf_path)
+
+
+def _write_collection(xdmf_path, grids: list[str]) -> None:
+    """The temporal collection of ``grids`` (the series)."""
+    steps = "".join(f"{grid}\n" for grid in grids)
+    _write_domain(xdmf_path, f'<Grid Name="series" GridType="Collection" CollectionType="Temporal">\n{steps}</Grid>')
 
 
 def _xml_file_name(name) -> str:
@@ -240,6 +270,26 @@ def _grid_body(location: str, layout: _GridLayout, field_kinds: Mapping[str, str
     return layout.mesh + _attributes(location, field_kinds, layout.cells_zyx, "Cell", precision)
 
 
+_CELL_TOPOLOGY = {1: ("Polyline", 2), 2: ("Quadrilateral", 4), 3: ("Hexahedron", 8)}  # ndim -> (XDMF type, nodes)
+
+
+def _cell_shape(shape: Sequence[int]) -> tuple[int, ...]:
+    shape = tuple(int(n) for n in shape)
+    if not 1 <= len(shape) <= 3 or min(shape) < 1:
+        raise ValueError(f"shape must give >= 1 cell along each of 1 to 3 axes (x[, y[, z]]), got {shape}")
+    return shape
+
+
+def _mesh_body(mesh_name, shape: tuple[int, ...]) -> str:
+    """Topology + geometry of the cells of a :func:`write_grid_mesh` file."""
+    cell_type, corners = _CELL_TOPOLOGY[len(shape)]
+    cells, nodes = int(np.prod(shape)), int(np.prod([n + 1 for n in shape]))
+    location = _h5_location(mesh_name)
+    return (f'<Topology TopologyType="{cell_type}" NodesPerElement="{corners}" NumberOfElements="{cells}">'
+            f'{_index_item((cells, corners), f"{location}/{CONNECTIVITY}", nodes - 1)}</Topology>'
+            f'<Geometry GeometryType="XYZ">{_data_item((nodes, 3), f"{location}/{POINTS}", 8)}</Geometry>')
+
+
 def _particle_count(h5_name, count) -> int:
     count = int(count)
     if count < 1:
@@ -248,7 +298,8 @@ def _particle_count(h5_name, count) -> int:
 
 
 def _particle_body(location: str, count: int, field_kinds: Mapping[str, str], precision: int) -> str:
-    return (f'<Topology TopologyType="Polyvertex" NodesPerElement="1" NumberOfElements="{count}"/>'
+    return (f'<Topology TopologyType="Polyvertex" NodesPerElement="1" NumberOfElements="{count}">'
+            f'{_index_item((count, 1), f"{location}/{CONNECTIVITY}", count - 1)}</Topology>'
             f'<Geometry GeometryType="XYZ">{_data_item((count, 3), f"{location}/{COORDINATES}", precision)}'
             f'</Geometry>{_attributes(location, field_kinds, (count,), "Node", precision)}')
 
@@ -271,7 +322,7 @@ def _write_grid(group: h5py.Group, time, origin, spacing, fields: Mapping[str, n
     group.attrs.update(time=_time(time), origin=origin, spacing=spacing, shape=np.array(shape))
     for name, array in arrays.items():
         kind, padded, value_shape = _padded(name, array, shape, ndim)
-        ds = group.create_dataset(name, data=_to_xdmf_order(padded.astype(dtype), ndim))
+        ds = group.create_dataset(name, data=_to_rows(padded.astype(dtype), ndim))
         ds.attrs.update(kind=kind, value_shape=np.array(value_shape, dtype=int))
         kinds[name] = kind
     return kinds
@@ -279,8 +330,8 @@ def _write_grid(group: h5py.Group, time, origin, spacing, fields: Mapping[str, n
 
 def _read_grid(group: h5py.Group) -> GridSnapshot:
     origin, spacing = np.array(group.attrs["origin"]), np.array(group.attrs["spacing"])
-    ndim = origin.size
-    fields = {name: _unpadded(_from_xdmf_order(ds[()], ndim), ndim, tuple(ds.attrs["value_shape"]))
+    shape = tuple(int(n) for n in group.attrs["shape"])
+    fields = {name: _unpadded(_from_rows(ds[()], shape), len(shape), tuple(ds.attrs["value_shape"]))
               for name, ds in group.items()}
     return GridSnapshot(float(group.attrs["time"]), origin, spacing, fields)
 
@@ -319,6 +370,52 @@ def write_grid_series(xdmf_path, snapshots: Sequence[tuple[str, float]], shape: 
                                   for index, (h5_name, time) in enumerate(snapshots)])
 
 
+def write_grid_mesh(h5_path, shape: Sequence[int], origin, spacing) -> None:
+    """Write the cells of a uniform grid as explicit lines (1D), quadrilaterals (2D) or hexahedra (3D) to one
+    HDF5 file, for the snapshot indices of :func:`write_grid_xdmf`: ``points`` (nodes, 3), x fastest, then y,
+    then z, padded with zeros to 3 coordinates; ``connectivity`` (cells, 2 / 4 / 8) in the cell order of the
+    snapshot files, each cell's nodes in VTK's order (counter-clockwise seen from +z, the lower face first).
+    """
+    shape = _cell_shape(shape)
+    origin, spacing = grid_geometry(origin, spacing)
+    ndim = len(shape)
+    if origin.size != ndim:
+        raise ValueError(f"shape must give >= 1 cell along each of the {origin.size} axes of origin, got {shape}")
+    nodes = [n + 1 for n in shape]
+    coordinates = [o + d * np.arange(n) for o, d, n in zip(origin, spacing, nodes)]
+    grids = np.meshgrid(*coordinates[::-1], indexing="ij")  # (z, y, x) order: x fastest when raveled
+    points = np.zeros((int(np.prod(nodes)), 3))
+    for axis in range(ndim):
+        points[:, axis] = grids[ndim - 1 - axis].ravel()
+    stride = np.cumprod([1] + nodes[:-1])  # node-index step along x, y, z
+    corner = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0),
+                       (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)])[:_CELL_TOPOLOGY[ndim][1], :ndim] @ stride
+    lower = np.meshgrid(*[np.arange(n) * s for n, s in zip(shape[::-1], stride[::-1])], indexing="ij")
+    first = np.sum(lower, axis=0).ravel()  # each cell's lowest node, cells x fastest
+    h5_path = Path(h5_path)
+    tmp = h5_path.with_name(h5_path.name + ".tmp")  # (written once per run: never left half written)
+    with h5py.File(tmp, "w") as f:
+        f.attrs.update(origin=origin, spacing=spacing, shape=np.array(shape))
+        f.create_dataset(POINTS, data=points)
+        f.create_dataset(CONNECTIVITY, data=(first[:, None] + corner).astype(_index_dtype(len(points) - 1)))
+    tmp.replace(h5_path)
+
+
+def write_grid_xdmf(xdmf_path, h5_name, mesh_name, shape: Sequence[int], field_kinds: Mapping[str, str], *,
+                    group: str = "", precision: int = 8) -> None:
+    """XDMF index of ONE grid snapshot with explicit cells, what ``meshio.read`` opens: the cells of
+    ``mesh_name`` (a :func:`write_grid_mesh` file) and the cell fields of ``h5_name`` (a
+    :func:`write_grid_snapshot` file, or the group ``group`` of a :func:`write_coupled_snapshot` file); both
+    names relative to the XDMF file. ``shape`` and ``field_kinds`` as for :func:`write_grid_series`.
+    """
+    shape = _cell_shape(shape)
+    _dtype(precision)
+    _check_kinds(field_kinds)
+    location = _h5_location(h5_name, group)
+    _write_domain(xdmf_path, _uniform(group or "grid", _mesh_body(mesh_name, shape) + _attributes(
+        location, field_kinds, (int(np.prod(shape)),), "Cell", precision)))
+
+
 # -------------------------------------------------------------------------------------------- particles
 def _write_particles(group: h5py.Group, time, positions, fields: Mapping[str, np.ndarray], active,
                      precision: int, allow_empty: bool = False) -> dict[str, str]:
@@ -336,10 +433,11 @@ def _write_particles(group: h5py.Group, time, positions, fields: Mapping[str, np
     if count == 0 and not allow_empty:
         raise ValueError("a particle snapshot needs at least one (active) particle; ParaView's XDMF readers fail "
                          "on an empty geometry, so skip this snapshot")
-    _check_names(fields, reserved=(COORDINATES,))
+    _check_names(fields, reserved=_PARTICLE_DATASETS)
     kinds = {}
     group.attrs.update(time=_time(time), n_points=count, ndim=ndim)
     group.create_dataset(COORDINATES, data=np.pad(positions[keep], ((0, 0), (0, 3 - ndim))).astype(dtype))
+    group.create_dataset(CONNECTIVITY, data=np.arange(count, dtype=_index_dtype(count - 1)).reshape(count, 1))
     for name, array in fields.items():
         kind, padded, value_shape = _padded(name, np.asarray(array), (n,), ndim)
         ds = group.create_dataset(name, data=padded[keep].astype(dtype))
@@ -351,7 +449,7 @@ def _write_particles(group: h5py.Group, time, positions, fields: Mapping[str, np
 def _read_particles(group: h5py.Group) -> ParticleSnapshot:
     ndim = int(group.attrs["ndim"])
     fields = {name: _unpadded(ds[()], 1, tuple(ds.attrs["value_shape"]))
-              for name, ds in group.items() if name != COORDINATES}
+              for name, ds in group.items() if name not in _PARTICLE_DATASETS}
     return ParticleSnapshot(float(group.attrs["time"]), group[COORDINATES][:, :ndim], fields)
 
 
@@ -386,12 +484,23 @@ def write_particle_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]]
     """XDMF temporal collection over particle snapshots: ``snapshots`` = [(h5 file relative to the XDMF, time,
     number of particles in it)]; ``field_kinds`` as returned by :func:`write_particle_snapshot`."""
     _dtype(precision)
-    _check_kinds(field_kinds, reserved=(COORDINATES,))
+    _check_kinds(field_kinds, reserved=_PARTICLE_DATASETS)
     _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time", "particles"))
     _write_collection(xdmf_path, [_uniform(f"step{index}", _particle_body(_h5_location(h5_name),
                                                                            _particle_count(h5_name, count),
                                                                            field_kinds, precision), time)
                                   for index, (h5_name, time, count) in enumerate(snapshots)])
+
+
+def write_particle_xdmf(xdmf_path, h5_name, count: int, field_kinds: Mapping[str, str], *, group: str = "",
+                        precision: int = 8) -> None:
+    """XDMF index of ONE particle snapshot, what ``meshio.read`` opens: ``h5_name`` (relative to the XDMF
+    file) a :func:`write_particle_snapshot` file of ``count`` >= 1 particles, or the group ``group`` of a
+    :func:`write_coupled_snapshot` file; ``field_kinds`` as returned by the snapshot writer."""
+    _dtype(precision)
+    _check_kinds(field_kinds, reserved=_PARTICLE_DATASETS)
+    _write_domain(xdmf_path, _uniform(group or "particles", _particle_body(
+        _h5_location(h5_name, group), _particle_count(h5_name, count), field_kinds, precision)))
 
 
 # ----------------------------------------------------------------------------------- grid + particles
@@ -434,7 +543,7 @@ def write_coupled_series(xdmf_path, snapshots: Sequence[tuple[str, float, int]],
     layout = _grid_layout(shape, origin, spacing)
     _dtype(precision)
     _check_kinds(grid_kinds)
-    _check_kinds(particle_kinds, reserved=(COORDINATES,))
+    _check_kinds(particle_kinds, reserved=_PARTICLE_DATASETS)
     _check_snapshot_list(snapshots, ("h5 file name relative to the XDMF file", "time", "particles"))
     steps = []
     for index, (h5_name, time, count) in enumerate(snapshots):

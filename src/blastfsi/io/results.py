@@ -6,10 +6,13 @@ Layout::
     scenario.toml              the resolved scenario (defaults filled in)
     summary.json               the run's summary quantities (rewritten at each output, key status)
     history.csv                (history_member<k>.csv for ensembles) SI units in the header; appended as the run goes
-    fields/                    field snapshots, one FieldWriter per snapshot kind; open member<k>.xdmf
-                               in ParaView (a time series). 1D meshes: snap_<i>.h5 (one group per member);
-                               grids, particles, and grid + particles in one file (coupled; groups grid,
-                               particles) (blastfsi.io.fields): member<k>_<i>.h5
+    fields/                    field snapshots, one FieldWriter per snapshot kind:
+                               member<k>.xdmf    member k's time series (open it in ParaView)
+                               member<k>_<i>.xdmf  snapshot i of member k as one mesh (meshio.read; coupled:
+                                                 member<k>_<i>_grid.xdmf and, with particles, _particles.xdmf)
+                               the data: 1D meshes snap_<i>.h5 (one group per member); grids, particles, and
+                               grid + particles in one file (coupled; groups grid, particles)
+                               (blastfsi.io.fields) member<k>_<i>.h5, with member<k>.mesh.h5 (a grid's cells)
     checkpoints/ckpt_<i>.h5    full solver state, for --restart
     plots/*.png
 """
@@ -162,6 +165,9 @@ class PolylineWriter:
                 grp.attrs["cell_fields"] = list(snap.cell_fields)
                 for name, arr in {**snap.node_fields, **snap.cell_fields}.items():
                     grp.create_dataset(name, data=np.asarray(arr, np.float64))  # the XDMF index says Precision 8
+        for k, snap in enumerate(members):
+            (path / "fields" / _index_file(index, k)).write_text(_xdmf(_polyline_grid(
+                index, k, list(snap.node_fields), list(snap.cell_fields), np.asarray(snap.nodes).size)))
 
     def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
         write_xdmf(path, member, snapshots, list(template.node_fields), list(template.cell_fields),
@@ -177,6 +183,25 @@ class PolylineWriter:
 
 def _member_file(index: int, member: int) -> str:
     return f"member{member}_{index:04d}.h5"
+
+
+def _index_file(index: int, member: int, part: str = "") -> str:
+    """The meshio-readable XDMF of one snapshot (``part``: grid or particles of a coupled one)."""
+    return f"member{member}_{index:04d}{'_' + part if part else ''}.xdmf"
+
+
+def _mesh_file(member: int) -> str:
+    return f"member{member}.mesh.h5"
+
+
+def _write_grid_index(path: Path, index: int, member: int, grid: Grid, kinds: dict, part: str = "") -> None:
+    """The snapshot's meshio-readable index, and the member's grid cells (written once)."""
+    shape, origin, spacing, _ = _grid_series_args(grid)
+    mesh = path / "fields" / _mesh_file(member)
+    if not mesh.is_file():
+        fields.write_grid_mesh(mesh, shape, origin, spacing)
+    fields.write_grid_xdmf(path / "fields" / _index_file(index, member, part), _member_file(index, member),
+                           mesh.name, shape, kinds, group=part)
 
 
 def _uniform(edges) -> tuple[list[float], list[float]]:
@@ -219,8 +244,9 @@ class GridWriter:
     def write(self, path: Path, index: int, time: float, members: list) -> None:
         for k, snap in enumerate(members):
             origin, spacing = _uniform(snap.edges)
-            fields.write_grid_snapshot(path / "fields" / _member_file(index, k), time, origin, spacing,
-                                       snap.cell_fields)
+            kinds = fields.write_grid_snapshot(path / "fields" / _member_file(index, k), time, origin, spacing,
+                                               snap.cell_fields)
+            _write_grid_index(path, index, k, snap, kinds)
 
     def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
         shape, origin, spacing, kinds = _grid_series_args(template)
@@ -237,8 +263,10 @@ class ParticleWriter:
 
     def write(self, path: Path, index: int, time: float, members: list) -> None:
         for k, snap in enumerate(members):
-            fields.write_particle_snapshot(path / "fields" / _member_file(index, k), time, snap.positions,
-                                           snap.point_fields)
+            kinds = fields.write_particle_snapshot(path / "fields" / _member_file(index, k), time, snap.positions,
+                                                   snap.point_fields)
+            fields.write_particle_xdmf(path / "fields" / _index_file(index, k), _member_file(index, k),
+                                       len(snap.positions), kinds)
 
     def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
         entries = [(_member_file(i, member), t, fields.particle_count(path / "fields" / _member_file(i, member)))
@@ -258,9 +286,14 @@ class CoupledWriter:
     def write(self, path: Path, index: int, time: float, members: list) -> None:
         for k, snap in enumerate(members):
             origin, spacing = _uniform(snap.grid.edges)
-            fields.write_coupled_snapshot(path / "fields" / _member_file(index, k), time, origin, spacing,
-                                          snap.grid.cell_fields, snap.particles.positions,
-                                          snap.particles.point_fields)
+            grid_kinds, particle_kinds = fields.write_coupled_snapshot(
+                path / "fields" / _member_file(index, k), time, origin, spacing, snap.grid.cell_fields,
+                snap.particles.positions, snap.particles.point_fields)
+            _write_grid_index(path, index, k, snap.grid, grid_kinds, fields.GRID_GROUP)
+            if len(snap.particles.positions):
+                fields.write_particle_xdmf(path / "fields" / _index_file(index, k, fields.PARTICLES_GROUP),
+                                           _member_file(index, k), len(snap.particles.positions), particle_kinds,
+                                           group=fields.PARTICLES_GROUP)
 
     def write_series(self, path: Path, member: int, snapshots: list[tuple[int, float]], template) -> None:
         shape, origin, spacing, grid_kinds = _grid_series_args(template.grid)
@@ -281,26 +314,32 @@ register_writer("particles", ParticleWriter())
 register_writer("coupled", CoupledWriter())
 
 
-def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node_fields, zone_fields, n_nodes) -> None:
-    """XDMF 3 temporal collection so ParaView opens the snapshots as a time series."""
+def _polyline_grid(index: int, member: int, node_fields, zone_fields, n_nodes: int, time=None) -> str:
+    """XDMF Uniform grid of member ``member`` of 1D snapshot ``index`` (``time``: that of a series step)."""
     n_zones = n_nodes - 1
-    grids = []
-    for index, time in snapshots:
-        h5 = f"{snapshot_name(index)}:/member{member}"
-        attrs = "".join(
-            f'<Attribute Name="{name}" Center="{center}"><DataItem Dimensions="{n}" NumberType="Float" '
-            f'Precision="8" Format="HDF">{h5}/{name}</DataItem></Attribute>'
-            for names, center, n in ((node_fields, "Node", n_nodes), (zone_fields, "Cell", n_zones))
-            for name in names)
-        grids.append(
-            f'<Grid Name="t{index}" GridType="Uniform"><Time Value="{float(time)!r}"/>'
+    h5 = f"{snapshot_name(index)}:/member{member}"
+    attrs = "".join(
+        f'<Attribute Name="{name}" Center="{center}"><DataItem Dimensions="{n}" NumberType="Float" '
+        f'Precision="8" Format="HDF">{h5}/{name}</DataItem></Attribute>'
+        for names, center, n in ((node_fields, "Node", n_nodes), (zone_fields, "Cell", n_zones))
+        for name in names)
+    stamp = "" if time is None else f'<Time Value="{float(time)!r}"/>'
+    return (f'<Grid Name="t{index}" GridType="Uniform">{stamp}'
             f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{n_zones}">'
             f'<DataItem Dimensions="{n_zones} 2" NumberType="Int" Precision="8" Format="HDF">{h5}/connectivity'
             f'</DataItem></Topology><Geometry GeometryType="XYZ"><DataItem Dimensions="{n_nodes} 3" '
             f'NumberType="Float" Precision="8" Format="HDF">{h5}/coordinates</DataItem></Geometry>{attrs}</Grid>')
-    text = ('<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain><Grid Name="fields" GridType="Collection" '
-            f'CollectionType="Temporal">{"".join(grids)}</Grid></Domain></Xdmf>\n')
-    (path / "fields" / f"member{member}.xdmf").write_text(text)
+
+
+def _xdmf(grid: str) -> str:
+    return f'<?xml version="1.0" ?>\n<Xdmf Version="3.0"><Domain>{grid}</Domain></Xdmf>\n'
+
+
+def write_xdmf(path: Path, member: int, snapshots: list[tuple[int, float]], node_fields, zone_fields, n_nodes) -> None:
+    """XDMF 3 temporal collection so ParaView opens the snapshots as a time series."""
+    grids = "".join(_polyline_grid(index, member, node_fields, zone_fields, n_nodes, time) for index, time in snapshots)
+    (path / "fields" / f"member{member}.xdmf").write_text(_xdmf(
+        f'<Grid Name="fields" GridType="Collection" CollectionType="Temporal">{grids}</Grid>'))
 
 
 def write_checkpoint(path: Path, index: int, leaves: dict, meta: dict, suffix: str = "") -> Path:

@@ -1,12 +1,12 @@
 """Pictures of a grid field: 1D line, 2D colour map, 3D colour map of a z-plane (default the middle)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import matplotlib
 import numpy as np
 
 from blastfsi.io.fields import grid_geometry
+from blastfsi.plotting.common import plain, save
+from blastfsi.plotting.units import scale, text
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -42,45 +42,72 @@ def field_image(origin, spacing, field, z: float | None = None
     return field.T, (float(origin[0]), float(upper[0]), float(origin[1]), float(upper[1])), z_plane
 
 
-def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x [m]", "y [m]", "z [m]"),
-                        title: str = "pressure", z_plane: float | None = None) -> None:
-    """Save a PNG of a cell-centred pressure field [Pa] on a uniform grid (lower corner ``origin``); in 3D
-    the plane ``z_plane`` (default the middle, :func:`field_image`)."""
+def _length_labels(names, values) -> tuple:
+    """(scale of lengths, "name [unit]" of each axis name) for coordinates ``values``."""
+    s = scale(values, "length")
+    return s, tuple(s.label(n) for n in names)
+
+
+def pressure_field_figure(origin, spacing, pressure, *, axis_labels=("x", "y", "z"), title: str = "pressure",
+                          z_plane: float | None = None):
+    """Figure of a cell-centred pressure field [Pa] on a uniform grid (lower corner ``origin``): 1D a line,
+    2D a colour map, 3D the colour map of the plane ``z_plane`` (default the middle, :func:`field_image`).
+    ``axis_labels`` name the axes (r, z in r-z); lengths and pressure are shown in units chosen from the data."""
     pressure = np.asarray(pressure, dtype=float)
     origin, spacing = grid_geometry(origin, spacing)
     if len(axis_labels) < origin.size:
         raise ValueError(f"axis_labels must name {origin.size} axes, got {list(axis_labels)}")
+    ps = scale(pressure, "pressure")
+    upper = origin + spacing * np.array(pressure.shape[:origin.size])
+    ls, labels = _length_labels(axis_labels, np.concatenate([origin, upper]))
     if pressure.ndim == 1 and origin.size == 1:
         fig, ax = plt.subplots(figsize=(8, 4.5))
         x = origin[0] + spacing[0] * (np.arange(pressure.size) + 0.5)
-        ax.plot(x, pressure, lw=1.2)
-        ax.set_xlabel(axis_labels[0]), ax.set_ylabel("pressure [Pa]"), ax.grid(alpha=0.3)
+        ax.plot(x / ls.factor, pressure / ps.factor, lw=1.2)
+        ax.set_xlabel(labels[0]), ax.set_ylabel(ps.label("pressure")), ax.grid(alpha=0.3)
+        plain(ax.xaxis, ax.yaxis)
     else:
         image, extent, z_plane = field_image(origin, spacing, pressure, z_plane)
         fig, ax = plt.subplots(figsize=(8, 6))
-        shown = ax.imshow(image, origin="lower", extent=extent, aspect="equal", interpolation="nearest",
-                          cmap="viridis")
-        fig.colorbar(shown, ax=ax, label="pressure [Pa]")
-        ax.set_xlabel(axis_labels[0]), ax.set_ylabel(axis_labels[1])
+        shown = ax.imshow(image / ps.factor, origin="lower", extent=tuple(e / ls.factor for e in extent),
+                          aspect="equal", interpolation="nearest", cmap="viridis")
+        bar = fig.colorbar(shown, ax=ax, label=ps.label("pressure"))
+        ax.set_xlabel(labels[0]), ax.set_ylabel(labels[1])
+        plain(ax.xaxis, ax.yaxis, bar.ax.yaxis)
         if z_plane is not None:
-            title = f"{title}, plane {axis_labels[2]} = {z_plane:.4g}"
-    fig.suptitle(title)  # (above the colour bar's exponent, which an axes title overlapped)
+            title = f"{title}, plane {axis_labels[2]} = {text(z_plane, 'length')}"
+    ax.set_title(title)
     fig.tight_layout()
-    fig.savefig(Path(png_path), dpi=120)
-    plt.close(fig)
+    return fig
 
 
-def plot_particle_damage(png_path, positions, damage, *, cell_size: float, axis_labels=("x [m]", "y [m]", "z [m]"),
-                         title: str = "damage", z_plane: float | None = None) -> None:
-    """Save a PNG of particles (P, ndim) coloured by damage (0 intact .. 1 failed); in 1D damage against x.
-    In 3D the particles within half a cell of the plane ``z_plane`` (default the middle of their z range)."""
+def plot_pressure_field(png_path, origin, spacing, pressure, *, axis_labels=("x", "y", "z"),
+                        title: str = "pressure", z_plane: float | None = None) -> None:
+    """:func:`pressure_field_figure` saved to ``png_path``."""
+    save(pressure_field_figure(origin, spacing, pressure, axis_labels=axis_labels, title=title, z_plane=z_plane),
+         png_path)
+
+
+def particle_damage_figure(positions, damage, *, cell_size: float, axis_labels=("x", "y", "z"),
+                           title: str = "damage", z_plane: float | None = None, profiles=None):
+    """Figure of particles (P, ndim) coloured by damage (0 intact .. 1 failed). 1D: the damage profile
+    against x, with the further ``profiles`` ({label: (P,) values 0..1}, e.g. tensile and compressive damage)
+    beside it: a spall plane is where the tensile damage reaches 1. 3D: the particles within half a cell of
+    the plane ``z_plane`` (default the middle of their z range)."""
     positions, damage = np.asarray(positions, dtype=float), np.asarray(damage, dtype=float)
     if positions.ndim != 2 or positions.shape[1] not in (1, 2, 3) or damage.shape != positions.shape[:1]:
         raise ValueError(f"positions must be (P, 1..3) and damage (P,), got {positions.shape} and {damage.shape}")
+    ls, labels = _length_labels(axis_labels, positions[:, :2] if positions.size else [])
     fig, ax = plt.subplots(figsize=(8, 6 if positions.shape[1] > 1 else 4))
     if positions.shape[1] == 1:
-        ax.plot(positions[:, 0], damage, ".", ms=3)
-        ax.set_xlabel(axis_labels[0]), ax.set_ylabel("damage"), ax.set_ylim(-0.05, 1.05), ax.grid(alpha=0.3)
+        order = np.argsort(positions[:, 0])
+        x = positions[order, 0] / ls.factor
+        for n, (label, values) in enumerate({"damage": damage, **(profiles or {})}.items()):  # (points: particles
+            ax.plot(x, np.asarray(values, float)[order], "o.x+"[n % 4], ms=3, ls="none",  # of a cell interleave)
+                    label=label, zorder=3 - 0.1 * n, alpha=0.8)
+        ax.set_xlabel(labels[0]), ax.set_ylabel("damage [-]"), ax.set_ylim(-0.05, 1.05), ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        plain(ax.xaxis)
     else:
         if positions.shape[1] == 3:
             z = positions[:, 2]
@@ -88,17 +115,26 @@ def plot_particle_damage(png_path, positions, damage, *, cell_size: float, axis_
                 z_plane = 0.5 * (z.min() + z.max()) if z.size else 0.0
             near = np.abs(z - z_plane) <= 0.5 * cell_size
             positions, damage = positions[near], damage[near]
-            title = f"{title}, |{axis_labels[2]} - {z_plane:.4g}| <= {0.5 * cell_size:.3g}"
-        shown = ax.scatter(positions[:, 0], positions[:, 1], c=damage, s=4, cmap="inferno_r", vmin=0.0, vmax=1.0)
-        fig.colorbar(shown, ax=ax, label="damage")
+            title = (f"{title}, |{axis_labels[2]} - {text(z_plane, 'length')}| <= "
+                     f"{text(0.5 * cell_size, 'length', 3)}")
+        shown = ax.scatter(positions[:, 0] / ls.factor, positions[:, 1] / ls.factor, c=damage, s=4,
+                           cmap="inferno_r", vmin=0.0, vmax=1.0)
+        fig.colorbar(shown, ax=ax, label="damage [-]")
         ax.set_aspect("equal")
         ax.locator_params(axis="x", nbins=3)  # (a thin plate's axis would crowd its tick labels)
         ax.tick_params(axis="x", labelrotation=45)
-        ax.set_xlabel(axis_labels[0]), ax.set_ylabel(axis_labels[1])
-    fig.suptitle(title)
+        ax.set_xlabel(labels[0]), ax.set_ylabel(labels[1])
+        plain(ax.xaxis, ax.yaxis)
+    fig.suptitle(title)  # (over the figure: a thin plate's axes are narrower than the title)
     fig.tight_layout()
-    fig.savefig(Path(png_path), dpi=120)
-    plt.close(fig)
+    return fig
+
+
+def plot_particle_damage(png_path, positions, damage, *, cell_size: float, axis_labels=("x", "y", "z"),
+                         title: str = "damage", z_plane: float | None = None, profiles=None) -> None:
+    """:func:`particle_damage_figure` saved to ``png_path``."""
+    save(particle_damage_figure(positions, damage, cell_size=cell_size, axis_labels=axis_labels, title=title,
+                                z_plane=z_plane, profiles=profiles), png_path)
 
 
 def plot_face_damage(png_path, faces: list[tuple[str, np.ndarray, np.ndarray]], *, axisymmetric: bool,
@@ -108,8 +144,9 @@ def plot_face_damage(png_path, faces: list[tuple[str, np.ndarray, np.ndarray]], 
     3D: the particles in plan."""
     fig, axes = plt.subplots(1, len(faces), figsize=(4.2 * len(faces), 4.2), squeeze=False,
                              subplot_kw={"projection": "polar"} if axisymmetric else {})
+    ls = scale(np.concatenate([np.ravel(lateral) for _, lateral, _ in faces]), "length")
     for ax, (label, lateral, values) in zip(axes[0], faces):
-        lateral, values = np.asarray(lateral, float), np.asarray(values, float)
+        lateral, values = np.asarray(lateral, float) / ls.factor, np.asarray(values, float)
         if axisymmetric:
             r = lateral[:, 0]
             edges = np.linspace(0.0, r.max(initial=1e-9), 61)
@@ -121,13 +158,13 @@ def plot_face_damage(png_path, faces: list[tuple[str, np.ndarray, np.ndarray]], 
                                   cmap="inferno_r")
             ax.set_xticks([])
             ax.tick_params(axis="y", labelsize=7)
-            ax.set_title(f"{label}\n(radius in m)", fontsize=9)
+            ax.set_title(f"{label}\n(radius in {ls.unit})", fontsize=9)
         else:
             shown = ax.scatter(lateral[:, 0], lateral[:, 1], c=values, s=4, cmap="inferno_r", vmin=0.0, vmax=1.0)
             ax.set_aspect("equal")
-            ax.set_xlabel("x [m]"), ax.set_ylabel("y [m]")
+            ax.set_xlabel(ls.label("x")), ax.set_ylabel(ls.label("y"))
+            plain(ax.xaxis, ax.yaxis)
             ax.set_title(label, fontsize=9)
     fig.colorbar(shown, ax=axes[0].tolist(), shrink=0.8, label="damage [-]")
     fig.suptitle(title, fontsize=10)
-    fig.savefig(Path(png_path), dpi=120)
-    plt.close(fig)
+    save(fig, png_path)
