@@ -81,7 +81,7 @@ def test_charge_mass_and_radius_agree_in_each_geometry():
 
 def test_spherical_detonation_conserves_energy_and_reports_gauges(one_kg):
     s = one_kg.summary
-    # the vNR energy defect is first order in dt (docs/theory.md); strong burn fronts make it
+    # the vNR energy defect is first order in dt (docs/theory/lagrangian1d.md); strong burn fronts make it
     # 0.3 % at 40 zones (measured 0.25-0.35 % over 100-1600 zones in the CJ study)
     assert abs(s["energy_error_relative"]) < 1e-2
     info = one_kg.setups[0].info

@@ -14,7 +14,7 @@ def euler_charge(**initial):
             "domain": {"geometry": "spherical", "lower": [0.0], "upper": [0.6]},
             "boundaries": {"x": ["axis", "outflow"]}, "grid": {"cells": 120},
             "initial": {"kind": "charge", "mass": 0.1, "cells": 30, "remap_time": 2e-5, **initial},
-            "time": {"end": 2e-5}, "output": {"history_samples": 5, "fields": 0, "plots": False, "gauges": [0.5]}}
+            "time": {"end": 4e-5}, "output": {"history_samples": 5, "fields": 0, "plots": False, "gauges": [0.5]}}
 
 
 def test_charge_remapped_into_euler_conserves_and_runs():

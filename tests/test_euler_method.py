@@ -32,7 +32,7 @@ def test_slope_limiters_point_values():
 def test_slope_limiters_order_the_sod_error():
     """numerics.limiter of hllc-muscl, Sod at 200 cells: every limiter stays within the smearing bound of
     the next test, and the error follows the limiters' compressiveness, MC < van Leer < minmod (the
-    measured errors are in docs/euler.md, Verification, item 1)."""
+    measured errors are in docs/verification.md, Verification, item 1)."""
     case = sod_000()
     dx = 1e-3 / 200
     errors = {}

@@ -200,7 +200,7 @@ def test_smooth_advection_order_3d_finer(scheme, grids):
     the adaptive viscosity clips each x-, y- and z-line's extremum band, three times per step in 3D, and
     this higher-harmonic part of the error, first order on coarse grids, dominates until ~128 cells,
     while the wave's amplitude error converges at order 2.2-2.5 and its phase error at 1.6-2.0 from 64
-    cells on (docs/euler.md, Verification, item 2)."""
+    cells on (docs/verification.md, Verification, item 2)."""
     errors = np.array([advected_wave_error(n, 3, scheme) for n in grids])
     order = np.log(errors[0] / errors[1]) / np.log(grids[1] / grids[0])
     print(f"scheme {scheme} 3D: L1 errors {errors.tolist()} at {grids}, order {order}")

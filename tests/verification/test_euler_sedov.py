@@ -11,7 +11,7 @@ Sedov peak moves the mid-height up to about 1.5 cells ahead of the exact front (
 Fine grids at the cost of coarse ones: the blast is symmetric, so a quadrant (2D) / octant (3D)
 [0, 1.2]^d with symmetry on the lower faces, or the r-z half domain z >= 0, holds the same cells
 at twice the resolution per axis; it equals the corresponding part of the full-box run to
-round-off (checked here on coarse grids). Errors measured on such grids (docs/euler.md, Verification
+round-off (checked here on coarse grids). Errors measured on such grids (docs/verification.md, Verification
 item 4) give the 1 % target of issue 5 on the grids below."""
 import numpy as np
 import pytest

@@ -19,7 +19,23 @@ remap time whose disturbed ball already crosses a non-mirror face, or leaves the
 Hemisphere (a surface burst, KB "surface"): its centre lies on a wall/symmetry
 face; the 1D run is a sphere of twice the mass, of which the domain holds half.
 In 2D Cartesian, likewise a half cylinder lying on a wall/symmetry face.
-Simulated time 0 of the euler run is the remap time (``info["remap_time"]``).
+
+One time axis: the euler (and cfdmp) run starts at the remap time (``info["remap_time"]``),
+so its history, gauges, snapshots and ``time.end`` all count from the detonation; ``time.end``
+must lie after the remap time.
+
+Stand-off charge (``initial.center`` outside the domain): R_lim is the distance from the
+centre to the nearest point of the domain (or the nearest gauge) less margin_cells dx, so
+the domain is still at rest at the remap. Each face the charge lies beyond is a ``blast``
+face: the 1D run goes on to ``time.end`` and its conservative rows are tabulated once
+(:func:`blast_table`) on radii dx / 4 apart over the distances of the layer cells (the
+:data:`LAYER` cells along each blast face), at times dx / (4 S) apart, S the shock speed at
+the remap (Rankine-Hugoniot from the peak overpressure: the shock only slows later). The
+euler step sets those cells from the table (:func:`blastfsi.euler.boundaries.blast_layer`).
+The 1D domain then reaches 1.5 c0 (time.end - t_remap) beyond the farthest layer cell: the
+shock reaches its open outer end after the remap time, and the rarefaction that end sends back
+runs inward at c - u, below c0 in shocked air (u grows faster than c) and near c0 in the weak
+negative phase, so it cannot reach the layer before ``time.end`` (margin 1.5).
 
 Kingery-Bulmash (``info["kb_burst"]``: "free-air" or "surface") holds for
 spherical TNT charges only; for a cylinder it is None (no KB comparison).
@@ -31,6 +47,8 @@ from typing import NamedTuple
 import numpy as np
 
 from blastfsi.detonation import remap as rm
+from blastfsi.euler.config import MIN_CELLS
+from blastfsi.euler.scenario import faces_toward
 from blastfsi.scenario import AXES
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
@@ -39,6 +57,8 @@ from blastfsi.scenario import ScenarioError
 
 EULER_GEOMETRIES = ("spherical", "axisymmetric", "cartesian")
 GEOMETRY_1D = {1: "cylindrical", 2: "spherical"}  # lagrangian1d domain.geometry of exponent j
+LAYER = MIN_CELLS  # cells of the blast layer along a blast face: the ghost depth of the schemes
+TABLE_ROWS = 5  # products and air partial densities, radial momentum, total energy, products fraction
 
 
 class ChargeFields(NamedTuple):
@@ -50,6 +70,7 @@ class ChargeFields(NamedTuple):
     pressure: np.ndarray
     reference_pressure: float
     info: dict
+    blast: dict | None = None  # the blast table (fields of blastfsi.euler.config.BlastTable, NumPy) or None
 
 
 def _material(sc, name: str, key: str):
@@ -84,7 +105,13 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
     d = sc.domain
     limits = []
     radial = d.geometry in ("spherical", "axisymmetric")
-    for ax in range(g.ndim):
+    if faces_toward(centre, d):  # stand-off: the nearest point of the domain
+        dist = float(np.sqrt(np.sum((centre - np.clip(centre, d.lower, d.upper)) ** 2)))
+        if dist < radius_1d:
+            raise ScenarioError(f"initial.center: the charge (radius {radius_1d:.4g} m) overlaps the domain (its "
+                                f"nearest point is {dist:.4g} m from the centre); move initial.center or the domain")
+        limits.append(dist)
+    for ax in range(g.ndim if not limits else 0):
         for k, face in enumerate((d.lower[ax], d.upper[ax])):
             if radial and ax == 0 and k == 0:
                 continue
@@ -109,19 +136,115 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
 
 
 def run_1d(explosive: str, radius: float, cells: int, air_ratio: float, length: float, t_end: float, gas: dict,
-           gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2):
+           gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2, history_samples: int = 2):
     """The 1D spherical (j = 2) or cylindrical (j = 1) detonation on ``lagrangian1d`` to ``t_end``
     (a :class:`blastfsi.simulation.Result`): ``cells`` zones across the charge radius, then uniform air
-    zones ``air_ratio`` times as wide."""
+    zones ``air_ratio`` times as wide; ``history_samples`` rows of history (gauge overpressures)."""
     from blastfsi import simulation
 
     data = {"method": "lagrangian1d", "name": "charge-1d", "charge": {"explosive": explosive, "radius": radius},
             "domain": {"geometry": GEOMETRY_1D[j], "length": length},
             "grid": {"cells": cells, "first_ratio": air_ratio, "max_ratio": air_ratio},
             "gas": gas, "time": {"end": t_end},
-            "output": {"history_samples": 2, "fields": 0, "plots": False, "gauges": gauges or [],
+            "output": {"history_samples": history_samples, "fields": 0, "plots": False, "gauges": gauges or [],
                        "arrival_fraction": arrival_fraction}}
+    simulation.announce(f"1D detonation of {charge_mass(radius, GASES[explosive].density, j):.4g} "
+                        f"{'kg/m' if j == 1 else 'kg'} {explosive.upper()} to t = {t_end * 1e3:.4g} ms "
+                        f"({cells} zones across the charge radius)")
     return simulation.run(data)
+
+
+def layer_mask(sc, g) -> np.ndarray:
+    """The cells of the blast layer: the LAYER cells along each ``blast`` face."""
+    mask = np.zeros(g.shape, bool)
+    for ax, name in enumerate(AXES[:g.ndim]):
+        for side, kind in enumerate(getattr(sc.boundaries, name)):
+            if kind == "blast":
+                sl = [slice(None)] * g.ndim
+                sl[ax] = slice(0, LAYER) if side == 0 else slice(g.shape[ax] - LAYER, g.shape[ax])
+                mask[tuple(sl)] = True
+    return mask
+
+
+def shock_speed(st, explosive_zones: int, j: int, gamma: float, p_a: float, rho_a: float) -> float:
+    """Speed of the leading shock of a 1D state (lagrangian1d arrays ``st``): the normal-shock relation
+    S = c0 sqrt(1 + (gamma + 1) / (2 gamma) dp / p0) of an ideal gas at the peak air overpressure dp."""
+    rho = np.asarray(st["zone_mass"]) / np.diff(np.asarray(st["x"]) ** (j + 1)) * (j + 1)  # per radian^j
+    p = (gamma - 1.0) * rho[explosive_zones:] * np.asarray(st["e"])[explosive_zones:]
+    dp = max(float(np.max(p)) - p_a, 0.0)
+    return float(np.sqrt(gamma * p_a / rho_a * (1.0 + (gamma + 1.0) / (2.0 * gamma) * dp / p_a)))
+
+
+def table_rows(profile: rm.Profile1D, radii: np.ndarray) -> np.ndarray:
+    """(n_radii, TABLE_ROWS) conservative rows of a 1D profile at ``radii``, linear between zone centres
+    (constant beyond the first and the last)."""
+    vol = rm.shell_measures(profile.edges, profile.j)
+    centres = 0.5 * (profile.edges[1:] + profile.edges[:-1])
+    cols = (profile.products / vol, (profile.mass - profile.products) / vol, profile.momentum / vol,
+            profile.energy / vol, (profile.products > 0.0).astype(float))
+    return np.stack([np.interp(radii, centres, c) for c in cols], axis=1)
+
+
+def table_plan(sc, g, centre, mask, t_remap: float, speed: float) -> dict:
+    """Radii and times of the blast table (module docstring), its memory checked against
+    ``initial.blast_table_mb``."""
+    pts = np.stack([m[mask] for m in g.mesh()], axis=1)
+    rel = pts - centre[None, :]
+    dist = np.sqrt(np.sum(rel**2, axis=1))
+    dr = 0.25 * g.dx
+    r0 = max(float(np.min(dist)) - g.dx, 0.0)
+    n_r = int(np.ceil((float(np.max(dist)) + g.dx - r0) / dr)) + 1
+    dt = dr / speed
+    n_t = int(np.ceil((sc.time.end - t_remap) / dt)) + 1
+    mb = n_t * n_r * TABLE_ROWS * 8 / 1e6
+    if mb > sc.initial.blast_table_mb:
+        raise ScenarioError(f"initial.blast_table_mb = {sc.initial.blast_table_mb:g}: the blast table of the blast "
+                            f"faces needs {mb:.4g} MB ({n_t} times x {n_r} radii, dx / 4 apart over "
+                            f"{float(np.max(dist)) - r0:.4g} m of distances and time.end - remap time = "
+                            f"{sc.time.end - t_remap:.4g} s); raise it, shorten time.end or coarsen grid.cells")
+    flat = np.nonzero(mask.reshape(-1))[0]
+    unit = (rel / np.where(dist > 0.0, dist, 1.0)[:, None]).T
+    return {"cells": flat, "radius": (dist - r0) / dr, "unit": unit, "t0": float(t_remap), "dt": float(dt),
+            "radii": r0 + dr * np.arange(n_r), "times": t_remap + dt * np.arange(n_t), "mb": mb}
+
+
+def blast_table(res, plan: dict, explosive_zones: int, j: int) -> dict:
+    """The table of ``plan``: the 1D run ``res`` (at the remap time) advanced to each of its times."""
+    import jax
+    import jax.numpy as jnp
+
+    from blastfsi import simulation
+
+    method, setup, state = res.method, res.setups[0], res.state
+    static = method.static(setup, res.scenario)
+    dtype = np.asarray(state.t).dtype
+    params = jax.tree_util.tree_map(lambda a: jnp.asarray(a)[None], method.params(setup, dtype))
+    scalars = (20_000, 10.0 * float(plan["times"][-1]), 1e-6)
+    advance, _ = simulation.compiled_advance(method, static, state, params, float(plan["times"][-1]), *scalars)
+    rows = np.empty((plan["times"].size, plan["radii"].size, TABLE_ROWS))
+    for k, t in enumerate(plan["times"]):
+        while float(np.asarray(state.t)[0]) < t:
+            state = advance(state, params, float(t), *scalars)
+            if int(np.asarray(state.fault)[0]) != 0:
+                raise ScenarioError(f"the 1D blast feeding the blast faces failed at t = {float(state.t[0]):.4g} s")
+        st = {f: np.asarray(v)[0] for f, v in state._asdict().items()}
+        rows[k] = table_rows(rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"],
+                                                        explosive_zones, j), plan["radii"])
+    return {key: plan[key] for key in ("cells", "radius", "unit", "t0", "dt")} | {"rows": rows}
+
+
+def probe_times(explosive: str, mass: float, r_lim: float, c0: float, burn: float, j: int) -> list[float]:
+    """End times of the 1D run that finds the blast's arrival at R_lim: for a TNT sphere first 1.5 x the
+    Kingery-Bulmash arrival there (the 1D TNT blast arrives within 13 % of it at Z >= 0.5,
+    docs/verification.md), then the sure bound R_lim / c0 + burn time (the blast front outruns sound)."""
+    from blastfsi.exact import kingery_bulmash as kb
+
+    sure = r_lim / c0 + burn
+    try:
+        guess = 1.5 * float(kb.value("arrival_time", mass, r_lim)) if explosive == "tnt" and j == 2 else sure
+    except ValueError:  # outside KB's range
+        guess = sure
+    return [guess, sure] if guess < sure else [sure]
 
 
 def charge_initial(sc, g) -> ChargeFields:
@@ -150,17 +273,30 @@ def charge_initial(sc, g) -> ChargeFields:
     gas = {"gamma": air.gamma, "pressure": p_a, "density": rho_a}
     length = 1.5 * r_lim + 10.0 * radius
     c0 = np.sqrt(air.gamma * p_a / rho_a)
+    mask = layer_mask(sc, g)
     if init.remap_time is None:
-        probe = run_1d(init.explosive, radius, init.cells, init.air_ratio, length,
-                       r_lim / c0 + radius / hx.detonation_velocity, gas, [r_lim], sc.output.arrival_fraction, j)
-        t_remap = probe.summary["gauges"][0]["arrival_time"]
+        t_remap = None
+        for t_probe in probe_times(init.explosive, mass_full, r_lim, c0, radius / hx.detonation_velocity, j):
+            probe = run_1d(init.explosive, radius, init.cells, init.air_ratio, length, t_probe, gas, [r_lim],
+                           sc.output.arrival_fraction, j)
+            t_remap = probe.summary["gauges"][0]["arrival_time"]
+            if t_remap is not None:
+                break
         if t_remap is None:
             raise ScenarioError("initial.remap_time: the 1D blast never reached the limit radius "
                                 f"{r_lim:.4g} m; give the remap time")
     else:
         t_remap = init.remap_time
+    if sc.time.end <= t_remap:
+        raise ScenarioError(f"time.end = {sc.time.end:g} s counts from the detonation and must lie after the remap "
+                            f"time {t_remap:.6g} s (the blast reaches the limit radius {r_lim:.4g} m then)")
+    if mask.any():  # the 1D run goes on to time.end and must reach beyond the farthest layer cell
+        far = float(np.max(np.sqrt(sum((m[mask] - c) ** 2 for m, c in zip(g.mesh(), centre)))))
+        length = max(length, far + g.dx + 1.5 * c0 * (sc.time.end - t_remap) + 10.0 * radius)
     # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
-    res = run_1d(init.explosive, radius, init.cells, init.air_ratio, length, max(t_remap, 1e-12), gas, j=j)
+    # (without a blast layer: the probe's zoning and gauge, the same compiled 1D loop)
+    res = run_1d(init.explosive, radius, init.cells, init.air_ratio, length, max(t_remap, 1e-12), gas, [r_lim],
+                 sc.output.arrival_fraction, j)
     setup = res.setups[0]
     st = {k: np.asarray(v)[0] for k, v in res.state._asdict().items()}
     profile = rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], setup.explosive_zones,
@@ -181,10 +317,18 @@ def charge_initial(sc, g) -> ChargeFields:
             "charge_radius": float(radius), "charge_mass": float(mass), "charge_center": centre.tolist(),
             "kb_burst": kb_burst, "one_d_zones": int(setup.cells),
             "one_d_air_zone": float(init.air_ratio * radius / init.cells),
-            "remap_share": out.share,
-            "remap_mass_error": float(np.sum(out.mass) / out.targets[0] - 1.0),
-            "remap_products_error": float(np.sum(out.products) / out.targets[1] - 1.0),
-            "remap_energy_error": float(np.sum(out.energy) / out.targets[2] - 1.0)}
+            "remap_share": out.share}
+    if out.targets is not None:
+        info.update(remap_mass_error=float(np.sum(out.mass) / out.targets[0] - 1.0),
+                    remap_products_error=float(np.sum(out.products) / out.targets[1] - 1.0),
+                    remap_energy_error=float(np.sum(out.energy) / out.targets[2] - 1.0))
+    table = None
+    if mask.any():
+        speed = shock_speed(st, setup.explosive_zones, j, air.gamma, p_a, rho_a)
+        plan = table_plan(sc, g, centre, mask, float(t_remap), speed)
+        table = blast_table(res, plan, setup.explosive_zones, j)
+        info.update(blast_table_mb=plan["mb"], blast_table_shape=list(table["rows"].shape),
+                    blast_layer_cells=int(mask.sum()), one_d_length=float(length))
     alpha = np.stack([out.alpha, 1.0 - out.alpha])  # (n_materials, *shape), the layout of the euler Setup
     return ChargeFields((init.explosive, air_name), eos, out.rho_k, alpha, out.velocity, out.pressure, float(p_a),
-                        info)
+                        info, table)

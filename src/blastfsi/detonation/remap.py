@@ -172,7 +172,7 @@ class Remapped(NamedTuple):
     volume: np.ndarray  # (*shape) cell volumes [m^3]
     share: float  # f, fraction of the ball (sphere or cylinder) inside the domain
     radius: float  # r_max, outer radius of the remapped (disturbed) ball [m]
-    targets: tuple  # exact (mass, products mass, energy) the grid must hold
+    targets: tuple | None  # exact (mass, products mass, energy) the grid must hold; None: centre outside
 
 
 def cell_volumes(edges_axes, geometry: str) -> np.ndarray:
@@ -200,7 +200,13 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     refused). The profile's j must be the grid's (:func:`ball_exponent`). ``mirrors``: per
     axis (lower, upper) booleans, True where that face is a wall/symmetry plane; a mirror face
     through the centre halves the share f. The ball of radius ``r_max`` (default: the disturbed
-    radius) must not cross any other face (RemapError)."""
+    radius) must not cross any other face (RemapError).
+
+    A centre outside the grid (a stand-off charge): the ball may reach into the grid anywhere; each
+    sub-cell then takes its bins' mean densities (bin total / shell measure) over its share of them,
+    so the grid holds the integral of the binned profile over the domain to the sub-cell sampling
+    error (``share``: the sampled fraction of the ball inside, ``targets`` None); cells out of its
+    reach, all of them before the blast arrives, hold the ambient state exactly."""
     ndim = len(edges_axes)
     centre = np.asarray(centre, float)
     if geometry == "spherical" and (ndim != 1 or centre[0] != 0.0):
@@ -217,7 +223,8 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     r_max = disturbed_radius(profile, ambient_density, air_e) if r_max is None else float(r_max)
     share = 1.0
     radial_axis = 0 if geometry in ("spherical", "axisymmetric") else None
-    for ax in range(ndim):
+    outside = any(not edges_axes[ax][0] <= centre[ax] <= edges_axes[ax][-1] for ax in range(ndim))
+    for ax in range(ndim if not outside else 0):
         lo, hi = edges_axes[ax][0], edges_axes[ax][-1]
         for side, face in (("lower", lo), ("upper", hi)):
             dist = abs(centre[ax] - face)
@@ -246,6 +253,10 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
         shape[ax] = -1
         dist2 = dist2 + gap.reshape(shape) ** 2
     near &= dist2 < r_max**2
+    if outside and not np.any(near):  # a stand-off charge remapped before its blast reaches the domain
+        z = np.zeros(vols.shape)
+        return _primitives(vols * ambient_density, z, np.zeros((ndim,) + vols.shape), vols * air_e, z, vols, vols,
+                           0.0, ambient_density, products_eos, air_eos, profile, r_max, None)
     idx = np.nonzero(near)
     pts, svol, owner = _sub_samples(edges_axes, geometry, n_sub, idx)
     rel = pts - centre[None, :]
@@ -266,15 +277,20 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     unit = np.where(radius[:, None] > 0.0, rel / np.where(radius > 0.0, radius, 1.0)[:, None], 0.0)
     unit = np.r_[unit, unit]
     W = np.bincount(b, weights=w, minlength=nb + 1)
-    if np.any(W[:nb] <= 0.0):
+    if not outside and np.any(W[:nb] <= 0.0):
         raise RemapError("a radial bin received no sub-cell (grid too coarse for the remap sampling)")
     v_near = float(np.sum(vols[near]))  # exact volume of the cells the ball reaches
-    amb_vol = v_near - ball  # exact ambient volume inside those cells; the rest of the grid is ambient as is
-    scale_vol = np.r_[share * shell_measures(bin_edges, j), amb_vol] / W
-    t_mass = np.r_[share * b_mass, ambient_density * amb_vol] / W
-    t_prod = np.r_[share * b_prod, 0.0] / W
-    t_mom = np.r_[share * b_mom, 0.0] / W
-    t_en = np.r_[share * b_en, amb_vol * air_e] / W
+    f = share
+    if outside:  # the domain holds a part of the ball known only by sampling: each bin's mean densities
+        share = float(np.sum(W[:nb]) / (UNIT_BALL[j] * r_max ** (j + 1)))  # (sampled, reported)
+        f, amb_vol, W = 1.0, 1.0, np.r_[shell_measures(bin_edges, j), 1.0]
+    else:
+        amb_vol = v_near - ball  # exact ambient volume inside those cells; the rest of the grid is ambient as is
+    scale_vol = np.r_[f * shell_measures(bin_edges, j), amb_vol] / W
+    t_mass = np.r_[f * b_mass, ambient_density * amb_vol] / W
+    t_prod = np.r_[f * b_prod, 0.0] / W
+    t_mom = np.r_[f * b_mom, 0.0] / W
+    t_en = np.r_[f * b_en, amb_vol * air_e] / W
     ncell = idx[0].size
     mass_n = np.bincount(own, weights=t_mass[b] * w, minlength=ncell)
     prod_n = np.bincount(own, weights=t_prod[b] * w, minlength=ncell)
@@ -294,8 +310,8 @@ def remap(profile: Profile1D, edges_axes, geometry: str, centre, mirrors, ambien
     for ax in range(ndim):
         momentum[ax][idx] = mom_n[ax]
     v_amb = float(np.sum(vols)) - ball
-    targets = (share * float(np.sum(b_mass)) + ambient_density * v_amb, share * float(np.sum(b_prod)),
-               share * float(np.sum(b_en)) + air_e * v_amb)
+    targets = None if outside else (share * float(np.sum(b_mass)) + ambient_density * v_amb,
+                                    share * float(np.sum(b_prod)), share * float(np.sum(b_en)) + air_e * v_amb)
     return _primitives(mass, products, momentum, energy, pvol, cvol, vols, share, ambient_density,
                        products_eos, air_eos, profile, r_max, targets)
 
@@ -308,7 +324,8 @@ def _primitives(mass, products, momentum, energy, pvol, cvol, vols, share, ambie
     has_a = air_mass > 0.0
     prod_zones = profile.products > 0.0
     prod_vol = shell_measures(profile.edges, profile.j)
-    fill_p = float(np.sum(profile.products) / np.sum(prod_vol[prod_zones]))  # mean products density
+    fill_p = (float(np.sum(profile.products) / np.sum(prod_vol[prod_zones])) if np.any(prod_zones)
+              else products_eos.rho0)  # mean products density (unused without products)
     rho_p = np.where(has_p & (alpha > 0.0), products / np.where(alpha > 0.0, alpha * vols, 1.0), fill_p)
     rho_a = np.where(has_a & (alpha < 1.0), air_mass / np.where(alpha < 1.0, (1.0 - alpha) * vols, 1.0),
                      ambient_density)

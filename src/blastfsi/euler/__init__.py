@@ -5,10 +5,12 @@ HLLC-MUSCL; one or two materials (five-equation products/air model, ERRATA
 000-9); Cartesian 1D/2D/3D, cylindrical (1D, 2D r-z) and spherical 1D.
 """
 from blastfsi.euler.config import (AXIS, CARTESIAN, CYLINDRICAL, HLLC_MUSCL, LAX_WENDROFF, MC, MINMOD, OUTFLOW,
-                                   PERIODIC, SPHERICAL, VAN_LEER, WALL, Config, Params, n_vars)
+                                   PERIODIC, SPHERICAL, VAN_LEER, WALL, BlastTable, Config, Params,
+                                   n_vars)
 from blastfsi.euler.step import (conservative, first_bad_cell, primitives, stable_dt, step, step_with_transfers,
-                                 total)
+                                 total, with_blast)
 
 __all__ = ["Config", "Params", "n_vars", "conservative", "primitives", "stable_dt", "first_bad_cell", "step",
-           "step_with_transfers", "total", "CARTESIAN", "CYLINDRICAL", "SPHERICAL", "OUTFLOW", "WALL", "AXIS",
+           "step_with_transfers", "total", "with_blast", "BlastTable",
+           "CARTESIAN", "CYLINDRICAL", "SPHERICAL", "OUTFLOW", "WALL", "AXIS",
            "PERIODIC", "LAX_WENDROFF", "HLLC_MUSCL", "VAN_LEER", "MINMOD", "MC"]

@@ -1,14 +1,21 @@
-"""Ghost cells by slicing (no jnp.roll), and the stencil offset helper.
+"""Ghost cells by slicing (no jnp.roll), the stencil offset helper, and the blast layer.
 
 Kinds (config): outflow = zero-gradient copy of the edge cell; wall, symmetry
 plane and the axis r = 0 = mirror image with the normal vector component
 negated; periodic = the cells of the opposite end.
+
+Blast faces (a charge outside the grid, :class:`blastfsi.euler.config.BlastTable`):
+the scheme sees an outflow face, and the layer of cells along it is set after
+every step to the 1D free-field solution at each cell's distance from the
+charge centre and the step's end time (:func:`blast_layer`), the "ambient
+layer" of LS-DYNA's blast-enhanced loading: the cells next to the layer then
+receive the incoming blast through the scheme's own fluxes.
 """
 from __future__ import annotations
 
 import jax.numpy as jnp
 
-from blastfsi.euler.config import OUTFLOW, PERIODIC
+from blastfsi.euler.config import OUTFLOW, PERIODIC, BlastTable, Layout
 
 
 def _slice(x, axis, start, stop):
@@ -69,3 +76,28 @@ def extend_coefficient(k, axis, kinds):
             return _slice(k, axis, 0, 1) if upper else _slice(k, axis, n - 1, n)
         return _slice(k, axis, n - 1, n) if upper else _slice(k, axis, 0, 1)
     return jnp.concatenate([ghost(lo_kind, False), k, ghost(hi_kind, True)], axis=axis)
+
+
+def blast_rows(table: BlastTable, t, dtype):
+    """(5, L) table rows at the layer cells at time ``t``, bilinear in radius and time (clamped to the
+    table: the last sample holds after it)."""
+    n_t, n_r = table.rows.shape[:2]
+    rows = table.rows.astype(dtype)
+    s = jnp.clip((jnp.asarray(t, dtype) - table.t0.astype(dtype)) / table.dt.astype(dtype), 0.0, n_t - 1.0)
+    k = jnp.minimum(jnp.floor(s), n_t - 2.0).astype(jnp.int32)
+    a = s - k
+    x = jnp.clip(table.radius.astype(dtype), 0.0, n_r - 1.0)
+    i = jnp.minimum(jnp.floor(x), n_r - 2.0).astype(jnp.int32)
+    b = (x - i)[:, None]
+    at_r = [(1.0 - b) * rows[kk][i] + b * rows[kk][i + 1] for kk in (k, k + 1)]
+    return ((1.0 - a) * at_r[0] + a * at_r[1]).T
+
+
+def blast_layer(U, t, table: BlastTable, lay: Layout):
+    """U with its blast-layer cells set to the tabulated free field at time ``t`` (two materials,
+    products first): partial densities, momentum = radial momentum density x the cell's unit vector
+    from the charge centre, total energy, products volume fraction."""
+    q = blast_rows(table, t, U.dtype)
+    rows = [q[0], q[1]] + [q[2] * table.unit[d].astype(U.dtype) for d in range(lay.ndim)] + [q[3], q[4]]
+    flat = U.reshape(U.shape[0], -1).at[:, table.cells].set(jnp.stack(rows))
+    return flat.reshape(U.shape)

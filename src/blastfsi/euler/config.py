@@ -13,7 +13,7 @@ shared by all rows once per row of a stacked array (several times slower).
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import jax
 
@@ -48,12 +48,33 @@ class Config(NamedTuple):
     limiter: int = VAN_LEER
 
 
+class BlastTable(NamedTuple):
+    """The free-field blast of a charge outside the grid, fed into the layer of cells along the faces
+    that face it (:func:`blastfsi.euler.boundaries.blast_layer`): the conservative rows of the 1D
+    solution tabulated on uniform radii and times, and where the layer cells lie in it.
+
+    cells (L,) flat (C-order) indices of the layer cells; radius (L,) their distance from the
+    charge centre as a fractional index into the radii (r - r_0) / dr; unit (ndim, L) the unit
+    vector from the centre to each; t0, dt: first time and spacing of the samples [s]; rows
+    (n_times, n_radii, 5): per sample, products partial density, air partial density, radial
+    momentum density, total energy density and products volume fraction."""
+
+    cells: jax.Array
+    radius: jax.Array
+    unit: jax.Array
+    t0: jax.Array
+    dt: jax.Array
+    rows: jax.Array
+
+
 class Params(NamedTuple):
     """Traced (vmappable) parameters: eos (n_materials, 6) JWL rows [A, B, R1, R2, omega, rho0]
-    (see blastfsi.eos.jwl; an ideal gas is A = B = 0, omega = gamma - 1), cfl: Courant number."""
+    (see blastfsi.eos.jwl; an ideal gas is A = B = 0, omega = gamma - 1), cfl: Courant number,
+    blast: the table of a charge outside the grid, or None."""
 
     eos: jax.Array
     cfl: jax.Array
+    blast: Optional[BlastTable] = None
 
 
 class Layout(NamedTuple):

@@ -76,7 +76,8 @@ class Euler:
         return Static(self._cfg(setup, sc), flat)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
-        return Params(kernels.Params(jnp.asarray(setup.eos, dtype), jnp.asarray(setup.info["cfl"], dtype)),
+        return Params(kernels.Params(jnp.asarray(setup.eos, dtype), jnp.asarray(setup.info["cfl"], dtype),
+                                     problem.blast_params(setup, dtype)),
                       jnp.asarray(setup.reference_pressure, dtype),
                       jnp.asarray(setup.info["arrival_fraction"] * setup.reference_pressure, dtype))
 
@@ -88,7 +89,9 @@ class Euler:
                                  params.kernel, static.cfg)
         maps = blast_maps.initial(_pressure(U, params, static.cfg) - params.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
-        return State(U, *maps, **timeloop.clock(n_samples, n_cols, dtype))
+        clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
+        clock["t"] = jnp.asarray(setup.info.get("remap_time", 0.0), dtype)
+        return State(U, *maps, **clock)
 
     def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         cfg = static.cfg
@@ -98,7 +101,7 @@ class Euler:
             return kernels.stable_dt(s.U, params.kernel, cfg)
 
         def step(s, dt):
-            U = kernels.step(s.U, dt, params.kernel, cfg)
+            U = kernels.step(s.U, dt, params.kernel, cfg, s.t)
             dp = _pressure(U, params, cfg) - params.reference_pressure
             maps = blast_maps.update(_maps(s), dp, s.t, dt, params.arrival_threshold)
             return s._replace(U=U, **maps._asdict())
@@ -176,8 +179,6 @@ class Euler:
         for q in ("mass", "energy"):
             first, last = hist[q][0], hist[q][-1]
             out[f"{q}_change_relative"] = float((last - first) / abs(first)) if first != 0 else None
-        # a charge run starts at the remap time: report times from the detonation
-        t0 = float(setup.info.get("remap_time", 0.0))
         gauges = []
         for k, (pos, cell) in enumerate(zip(setup.gauges, setup.gauge_cells)):
             arrival = float(state.arrival[cell])
@@ -186,7 +187,7 @@ class Euler:
                 "position": [float(v) for v in pos],
                 "peak_overpressure": float(state.peak[cell]),
                 "impulse": float(state.impulse[cell]),
-                "arrival_time": t0 + arrival if np.isfinite(arrival) else None,
+                "arrival_time": arrival if np.isfinite(arrival) else None,
                 "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None,
             })
         if "charge_mass" in setup.info and gauges:
@@ -197,7 +198,8 @@ class Euler:
                 r = kb_compare.distances(setup.gauges, info["charge_center"])
                 refs = kb_compare.scenario_references(sc, info, float(setup.grid.dx))  # by position, or set
                 gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"], refs)
-            out.update(charge_mass=info["charge_mass"], remap_time=t0, one_d_air_zone=info["one_d_air_zone"])
+            out.update(charge_mass=info["charge_mass"], remap_time=info["remap_time"],
+                       one_d_air_zone=info["one_d_air_zone"])
         out["gauges"] = gauges
         return out
 
@@ -206,24 +208,24 @@ class Euler:
         """Gauge overpressure histories and the final pressure field (3D: the plane output.plot_plane_z), member 0."""
         from blastfsi.plotting.fields import plot_pressure_field
         from blastfsi.plotting.histories import gauge_histories
+        from blastfsi.plotting.units import text
 
-        if sc.output.gauges:  # (a charge: the run starts at its remap)
-            t0 = setups[0].info.get("remap_time", 0.0)
-            gauge_histories(folder / "gauges.png", histories, sc.output.gauges, t0)
+        if sc.output.gauges:
+            gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
             if sc.initial.kind == "charge" and setups[0].info["kb_burst"] is not None:
                 from blastfsi.detonation.kb_compare import scenario_references
                 from blastfsi.plotting.kb import kb_gauge_histories
 
                 info = setups[0].info
-                hist = dict(histories[0], time=histories[0]["time"] + t0)
-                kb_gauge_histories(folder / "gauges_kb.png", hist, sc.output.gauges, info["charge_mass"],
+                kb_gauge_histories(folder / "gauges_kb.png", histories[0], sc.output.gauges, info["charge_mass"],
                                    info["kb_burst"], centre=info["charge_center"],
                                    references=scenario_references(sc, info, float(setups[0].grid.dx)))
         grid = finals[0]
-        labels = ("r [m]", "z [m]") if sc.domain.geometry != "cartesian" else ("x [m]", "y [m]", "z [m]")
+        labels = ("r", "z") if sc.domain.geometry != "cartesian" else ("x", "y", "z")
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
                             grid.cell_fields["pressure"], axis_labels=labels,
-                            title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s", z_plane=sc.output.plot_plane_z)
+                            title=f"{sc.name}: pressure at t = {text(sc.time.end, 'time')}",
+                            z_plane=sc.output.plot_plane_z)
 
 
 def _per(ndim: int, geometry: str, unit: str) -> str:

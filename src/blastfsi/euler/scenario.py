@@ -25,7 +25,7 @@ from blastfsi.scenario import (AXES, Coordinate, Demand, Output, ScenarioBase, S
 
 Vector = Union[float, list[float]]
 Limiter = Literal["van-leer", "minmod", "mc"]  # numerics.limiter of hllc-muscl (euler and cfdmp methods)
-BOUNDARY_KINDS = ("outflow", "wall", "symmetry", "axis", "periodic")
+BOUNDARY_KINDS = ("outflow", "wall", "symmetry", "axis", "periodic", "blast")
 
 
 class GasState(Strict):
@@ -62,7 +62,12 @@ class ChargeInitial(Strict):
     burn of 000 Eqs. 52-53) up to the remap time, then remapped conservatively onto this grid
     (:mod:`blastfsi.detonation.remap`, seed 000 Sec. 4.1). A sphere (1D spherical run) on 1D spherical,
     axisymmetric and 3D Cartesian domains; on a 2D Cartesian domain an infinitely long cylinder along z
-    (1D cylindrical run). Simulated time 0 is the remap time."""
+    (1D cylindrical run). Times count from the detonation: the run starts at the remap time.
+
+    Stand-off: ``center`` may lie outside the domain. The 1D blast is then run until it nears the
+    domain (or the nearest gauge), the domain starts at rest, and every face the charge lies beyond is
+    a ``blast`` face (``[boundaries]``): the 1D solution, continued to ``time.end`` and tabulated once,
+    feeds the layer of cells along it at each cell's distance from the charge and the current time."""
 
     kind: Literal["charge"]
     explosive: str = Field("tnt", min_length=1, description="explosive from the material library (JWL)")
@@ -86,6 +91,10 @@ class ChargeInitial(Strict):
         "Z >= 1 (docs/verification.md)"))
     margin_cells: float = Field(3.0, ge=0.0, le=1000.0, description="margin of the automatic remap time [cells]")
     sub_cells: int = Field(4, ge=1, le=64, description="sub-cells per axis of the remap integration")
+    blast_table_mb: float = Field(512.0, gt=0.0, le=1e5, description=(
+        "largest memory [MB] of the tabulated 1D blast that feeds the blast faces of a stand-off charge "
+        "(radii dx / 4 apart over the layer cells' distances, times dx / 4 over the shock speed apart up to "
+        "time.end); a larger table is refused before the 1D run goes on"))
 
     @model_validator(mode="after")
     def _one_size(self):
@@ -98,7 +107,9 @@ Initial = Annotated[Union[RiemannInitial, PointEnergyInitial, ChargeInitial], Fi
 
 
 class Domain(Strict):
-    geometry: Literal["cartesian", "cylindrical", "spherical", "axisymmetric"] = "cartesian"
+    geometry: Literal["cartesian", "cylindrical", "spherical", "axisymmetric"] = Field("cartesian", description=(
+        "cartesian: 1-3 axes x (, y (, z)); cylindrical, spherical: 1 axis, the radius r >= 0; axisymmetric: "
+        "2 axes r >= 0 and z"))
     lower: list[Coordinate] = Field(min_length=1, max_length=3, description="lower corner [m]")
     upper: list[Coordinate] = Field(min_length=1, max_length=3, description="upper corner [m]")
 
@@ -124,15 +135,18 @@ class Domain(Strict):
         return math.prod(max(1.0, round((hi - lo) / dx)) for lo, hi in zip(self.lower, self.upper))
 
 
-BoundaryPair = Annotated[list[Literal["outflow", "wall", "symmetry", "axis", "periodic"]], Field(min_length=2, max_length=2)]
+BoundaryPair = Annotated[list[Literal["outflow", "wall", "symmetry", "axis", "periodic", "blast"]],
+                         Field(min_length=2, max_length=2)]
 
 
 class Boundaries(Strict):
-    """Kind of each face, [lower, upper] per axis: outflow (zero gradient), wall, symmetry, axis, periodic (both faces)."""
+    """Kind of each face, [lower, upper] per axis: outflow (zero gradient), wall, symmetry, axis, periodic (both
+    faces), blast (a face that a charge outside the domain lies beyond: fed by its 1D free-field blast)."""
 
-    x: BoundaryPair = ["outflow", "outflow"]
-    y: BoundaryPair = ["outflow", "outflow"]
-    z: BoundaryPair = ["outflow", "outflow"]
+    x: BoundaryPair = Field(["outflow", "outflow"], description="kinds of the lower and upper x faces (the radius "
+                                                                "r in radial and r-z geometry: 'axis' at r = 0)")
+    y: BoundaryPair = Field(["outflow", "outflow"], description="kinds of the lower and upper y faces (z in r-z)")
+    z: BoundaryPair = Field(["outflow", "outflow"], description="kinds of the lower and upper z faces")
 
 
 class Grid(Strict):
@@ -140,7 +154,9 @@ class Grid(Strict):
 
 
 class Numerics(SharedNumerics):
-    scheme: Literal["lax-wendroff", "hllc-muscl"] = "hllc-muscl"
+    scheme: Literal["lax-wendroff", "hllc-muscl"] = Field("hllc-muscl", description=(
+        "lax-wendroff: the CFDMP paper's split Lax-Wendroff with adaptive artificial viscosity; hllc-muscl: "
+        "unsplit HLLC fluxes on a limited MUSCL reconstruction, second order in space and time"))
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="Courant number of the full time step")
     limiter: Limiter = Field("van-leer", description=(
         "slope limiter of hllc-muscl's reconstruction: van-leer (default), minmod (most diffusive) or mc "
@@ -206,11 +222,47 @@ def check_gas_part(sc, used: dict[str, str]) -> None:
     check_plot_plane(sc.output, d)
     if init.kind in ("point-energy", "charge") and init.center:
         c = init.center
-        if len(c) != d.ndim or not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper)):
+        if len(c) != d.ndim or (init.kind == "point-energy"
+                                and not all(lo <= v <= hi for v, lo, hi in zip(c, d.lower, d.upper))):
             extent = ", ".join(f"{a} in [{lo:g}, {hi:g}]" for a, lo, hi in zip(AXES, d.lower, d.upper))
-            raise ValueError(f"initial.center = {c} must be {d.ndim} coordinate(s) inside the domain ({extent} m)")
+            raise ValueError(f"initial.center = {c} must be {d.ndim} coordinate(s)"
+                             + (f" inside the domain ({extent} m)" if init.kind == "point-energy" else ""))
+    check_blast_faces(sc)
     if init.kind == "charge" and init.remap_time is not None:
         _check_remap_time(sc)
+
+
+def faces_toward(centre, domain) -> list[tuple[int, int]]:
+    """(axis, side) of every face of ``domain`` that a point ``centre`` lies strictly beyond."""
+    return [(ax, side) for ax in range(domain.ndim) for side in (0, 1)
+            if (centre[ax] < domain.lower[ax] if side == 0 else centre[ax] > domain.upper[ax])]
+
+
+def check_blast_faces(sc) -> None:
+    """``blast`` faces: with a charge only, each facing it (the charge lies beyond its plane); every face a
+    charge lies beyond is a blast face or a wall/symmetry plane (which the blast then never crosses)."""
+    d, init = sc.domain, sc.initial
+    blast = [(ax, side) for ax, a in enumerate(AXES[:d.ndim]) for side in (0, 1)
+             if getattr(sc.boundaries, a)[side] == "blast"]
+    if blast and init.kind != "charge":
+        ax, side = blast[0]
+        raise ValueError(f"boundaries.{AXES[ax]}: a 'blast' face needs a charge (initial.kind = 'charge') outside "
+                         f"the domain, not initial.kind = {init.kind!r}")
+    if init.kind != "charge":
+        return
+    toward = faces_toward(init.center or [0.0] * d.ndim, d)
+    for ax, side in blast:
+        if (ax, side) not in toward:
+            raise ValueError(f"boundaries.{AXES[ax]}: the {('lower', 'upper')[side]} {AXES[ax]} face is 'blast' but "
+                             f"does not face the charge: initial.center[{AXES[ax]}] must lie beyond it "
+                             f"({'below' if side == 0 else 'above'} {(d.lower, d.upper)[side][ax]:g} m)")
+    for ax, side in toward:
+        kind = getattr(sc.boundaries, AXES[ax])[side]
+        if kind not in ("blast", "wall", "symmetry"):
+            raise ValueError(f"initial.center = {init.center} lies outside the domain, beyond its "
+                             f"{('lower', 'upper')[side]} {AXES[ax]} face: move it inside, or (a stand-off charge) "
+                             f"make that face 'blast' in boundaries.{AXES[ax]} (fed by the charge's 1D blast; "
+                             f"'wall' or 'symmetry' also hold), got {kind!r}")
 
 
 def _check_remap_time(sc) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry, hllc, lax_wendroff
+from blastfsi.euler.boundaries import blast_layer
 from blastfsi.euler.config import LAX_WENDROFF, Config, Params, check_config, check_params, layout
 from blastfsi.euler.mixture import cell_state, conservative_rows, eos_rows
 
@@ -101,10 +102,21 @@ def _kernel(cfg: Config):
     return lax_wendroff.step if cfg.scheme == LAX_WENDROFF else hllc.step
 
 
-def step(U, dt, params: Params, cfg: Config):
-    """One full time step of length dt with the scheme of cfg.scheme."""
+def step(U, dt, params: Params, cfg: Config, t=None):
+    """One full time step of length dt from time t with the scheme of cfg.scheme; with a blast table
+    (``params.blast``) its layer is then set at t + dt (:func:`with_blast`)."""
     lay, eos_r = _setup(U, params, cfg)
-    return _kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay)
+    return with_blast(_kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay), t, dt, params, cfg)
+
+
+def with_blast(U, t, dt, params: Params, cfg: Config):
+    """U with the blast layer of ``params.blast`` set to the free field at t + dt
+    (:func:`blastfsi.euler.boundaries.blast_layer`); U itself without a table. A table needs t."""
+    if params.blast is None:
+        return U
+    if t is None:
+        raise ValueError("a step with a blast table (Params.blast) needs the time t of its start")
+    return blast_layer(U, jnp.asarray(t, U.dtype) + jnp.asarray(dt, U.dtype), params.blast, layout(cfg))
 
 
 def face_shape(cfg: Config, axis: int) -> tuple:
@@ -113,7 +125,8 @@ def face_shape(cfg: Config, axis: int) -> tuple:
 
 
 def step_with_transfers(U, dt, params: Params, cfg: Config):
-    """(U_new, transfers): U_new as step(U, dt, params, cfg) gives it and the amounts each face passed.
+    """(U_new, transfers): U_new as step(U, dt, params, cfg) gives it without the blast layer (apply
+    :func:`with_blast` after it, booking its change as inflow) and the amounts each face passed.
 
     transfers: one array per axis a, of shape (nvar, *face_shape(cfg, a)). T[r, ..., f, ...] is the
     amount of row r moved across face f of axis a (between cells f-1 and f) from the low to the

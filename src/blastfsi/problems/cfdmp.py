@@ -162,6 +162,11 @@ def build(sc: CfdmpScenario) -> Setup:
     lo = tuple(_cell_index(sc, v, ax, dx, "mpm_region.lower") for ax, v in enumerate(box.lower))
     hi = tuple(_cell_index(sc, v, ax, dx, "mpm_region.upper") for ax, v in enumerate(box.upper))
     coupled = [(lo[ax] > 0, hi[ax] < shape[ax]) for ax in range(nd)]
+    for ax in range(nd):
+        for side in (0, 1):
+            if getattr(sc.boundaries, AXES[ax])[side] == "blast" and not coupled[ax][side]:
+                raise ScenarioError(f"mpm_region: the box reaches the {('lower', 'upper')[side]} {AXES[ax]} face of "
+                                    "the domain, a 'blast' face (fed by the charge's 1D blast); keep it inside")
     w = box.bridge_cells
     for ax in range(nd):
         need = w * sum(coupled[ax]) + FICTITIOUS_DEPTH

@@ -16,7 +16,8 @@ from blastfsi.materials.gases import JWLExplosive
 from blastfsi.scenario import ScenarioError, cells_along
 
 GEOMETRY_CODE = {"cartesian": 0, "cylindrical": 1, "spherical": 2, "axisymmetric": 1}
-BOUNDARY_CODE = {"outflow": 0, "wall": 1, "symmetry": 1, "axis": 2, "periodic": 3}
+# a blast face is an outflow face to the scheme; its layer of cells is set from the blast table
+BOUNDARY_CODE = {"outflow": 0, "wall": 1, "symmetry": 1, "axis": 2, "periodic": 3, "blast": 0}
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,7 @@ class Setup:
     gauges: np.ndarray  # (G, ndim) positions
     gauge_cells: tuple[tuple[int, ...], ...]
     info: dict = field(default_factory=dict)
+    blast: dict | None = None  # the blast table of a stand-off charge (blastfsi.detonation.charge.blast_table)
 
     @property
     def cells(self) -> int:
@@ -117,6 +119,20 @@ def _gauges(sc: EulerScenario, g: GridGeometry):
     return pts, tuple(g.cell_of(p) for p in pts)
 
 
+def blast_params(setup: Setup, dtype):
+    """The traced blast table of ``setup`` (:class:`blastfsi.euler.config.BlastTable`), or None."""
+    import jax.numpy as jnp
+
+    from blastfsi.euler.config import BlastTable
+
+    b = setup.blast
+    if b is None:
+        return None
+    return BlastTable(jnp.asarray(b["cells"], jnp.int32), jnp.asarray(b["radius"], dtype),
+                      jnp.asarray(b["unit"], dtype), jnp.asarray(b["t0"], dtype), jnp.asarray(b["dt"], dtype),
+                      jnp.asarray(b["rows"], dtype))
+
+
 def build(sc: EulerScenario) -> Setup:
     g = grid_geometry(sc)
     bc = boundary_codes(sc)
@@ -129,7 +145,7 @@ def build(sc: EulerScenario) -> Setup:
         info = {"materials": list(c.materials), "dx": g.dx, "shape": list(g.shape), "geometry": g.geometry,
                 "cfl": sc.numerics.cfl, "arrival_fraction": sc.output.arrival_fraction, **c.info}
         return Setup(g, c.materials, c.eos, bc, c.rho_k, c.alpha, c.velocity, c.pressure, c.reference_pressure,
-                     gauges, gauge_cells, info)
+                     gauges, gauge_cells, info, c.blast)
     ndim = g.ndim
     mesh = g.mesh()
     if init.kind == "riemann":
