@@ -1,5 +1,5 @@
 """Accuracy study (not a timing): a point-energy blast crossing an MPM gas box, CFDMP against the
-all-Eulerian run on the same grid, in r-z (2 kJ) or 2D Cartesian (40 kJ/m). docs/cfdmp.md quotes it.
+all-Eulerian run on the same grid, in r-z (2 kJ) or 2D Cartesian (40 kJ/m). docs/theory/cfdmp.md quotes it.
 
     python benchmarks/study_cfdmp_axisym_blast.py CELLS METHOD axi|cart [dotted.key=value ...]
 

@@ -50,7 +50,7 @@ def test_reflected_state_is_at_rest_by_face_pressure():
 def test_f_R_limits_and_eq30_weak_shock_agreement():
     assert shock.f_R(1e-6 * P0, P0, RHO0) == pytest.approx(1.0, rel=1e-5)
     assert shock.f_R_eq30(1e-6 * P0, P0) == pytest.approx(1.0, rel=1e-5)
-    for r in (0.01, 0.1, 1.0):  # the printed Eq. (30) agrees for weak shocks only (docs/theory.md)
+    for r in (0.01, 0.1, 1.0):  # the printed Eq. (30) agrees for weak shocks only (docs/theory/lagrangian1d.md)
         assert shock.f_R_eq30(r * P0, P0) == pytest.approx(shock.f_R(r * P0, P0, RHO0), rel=3e-4)
 
 

@@ -143,7 +143,7 @@ def test_float32_run_keeps_precision_and_accuracy():
 
 def test_free_end_expands_to_the_free_surface_velocity():
     # plate.areal_mass = 0: the end node is a free surface held at p0; after the
-    # shock arrives it leaves at u_fs (isentropic expansion to p0, docs/theory.md)
+    # shock arrives it leaves at u_fs (isentropic expansion to p0, docs/theory/lagrangian1d.md)
     ps = 4.49 * P0
     res = simulation.run(uniform_data(plate__beta_s=None, plate__areal_mass=0.0, grid__cells=800, output__fields=0))
     assert res.summary["beta_s"] is None and res.summary["plate_impulse"] == 0.0

@@ -79,7 +79,7 @@ class Output(Strict):
         default_factory=list, max_length=100,
         description=("gauge points fixed in space [m]: a number in 1D, [x, y] or [x, y, z]; each method checks "
                      "the dimension and that the point lies inside its domain (see gauge_points)"))
-    plots: bool = True
+    plots: bool = Field(True, description="write the method's plots (PNG) to plots/ at the end of the run")
 
     @field_validator("gauges", mode="before")
     @classmethod
@@ -101,7 +101,8 @@ def _is_number(v) -> bool:
 class Numerics(Strict):
     """Shared numerics keys; a method subclasses it to add its own (and may change the cfl default)."""
 
-    precision: Literal["float64", "float32"] = "float64"
+    precision: Literal["float64", "float32"] = Field("float64", description=(
+        "floating-point precision of the state and the time loop; float32 runs faster on a GPU"))
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="time-step factor (Courant number)")
     allow_large: bool = Field(False, description=(
         "run even when the estimated memory exceeds what this machine has, or the sweep has more than "
@@ -140,7 +141,7 @@ class ScenarioBase(Strict):
 
     method: str
     name: str = Field(min_length=1, max_length=100, description="names the default results directory")
-    description: str = ""
+    description: str = Field("", description="free text saying what the scenario is (listed by blastfsi examples)")
     time: Time
     output: Output = Output()
     numerics: Numerics = Numerics()

@@ -103,7 +103,7 @@ def f_R_eq30(overpressure, p0):
     It tends to 1 in the acoustic limit and agrees with :func:`f_R` to 0.03 %
     for p_s/p0 <= 1, but falls below it for stronger shocks (8 % low at
     p_s/p0 = 4.49, 34 % at 100): the extracted formula does not reproduce the
-    light-plate limit it is meant to encode, see docs/theory.md.
+    light-plate limit it is meant to encode, see docs/theory/lagrangian1d.md.
     """
     x = np.asarray(overpressure, dtype=float) / p0
     cr = reflection_coefficient(overpressure, p0, 1.4)

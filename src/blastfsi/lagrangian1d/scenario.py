@@ -65,7 +65,7 @@ class Plate(Strict):
     ``density`` with ``thickness``; or set ``fixed = true`` for a rigid wall.
     """
 
-    fixed: bool = False
+    fixed: bool = Field(False, description="a rigid, immovable wall instead of a free-standing plate")
     areal_mass: Optional[float] = Field(None, ge=0.0, description=(
         "rho_p h_p [kg/m^2]; 0 makes the end a free surface held at back_pressure"))
     beta_s: Optional[float] = Field(None, gt=0.0, description="compressible FSI parameter, Eq. (28) [-]")
@@ -150,7 +150,7 @@ class Output(SharedOutput):
 
 
 class Numerics(SharedNumerics):
-    # Defaults chosen in docs/theory.md: K1^2 = 2.25 spreads a shock over ~3 zones,
+    # Defaults chosen in docs/theory/lagrangian1d.md: K1^2 = 2.25 spreads a shock over ~3 zones,
     # K2 = 0.1 damps post-shock ringing; alpha = cfl = 0.5 leaves margin below the bound.
     K1: float = Field(1.5, ge=0.0, le=5.0, description="quadratic viscosity coefficient, Eq. (5)")
     K2: float = Field(0.1, ge=0.0, le=2.0, description="linear viscosity coefficient, Eq. (5)")

@@ -10,7 +10,7 @@ whole levels.
 Sign convention: the paper's Q (Eq. 5) is <= 0 and enters as p = p_eos - Q; here
 q = -Q >= 0 and p = p_eos + q.
 
-Departures from the printed paper, each argued in docs/theory.md:
+Departures from the printed paper, each argued in docs/theory/lagrangian1d.md:
 * Eq. (9) uses 1/2 (dt_j + dt_{j+1}) (ERRATA 002-2).
 * Eq. (12) uses the current zone density rho (not the reference rho0) in both
   viscous terms, the classical vNR form; rho0 Dx = rho0_ref DX makes the two
