@@ -5,8 +5,10 @@ One step of length dt (all particle loops are whole-array operations):
 1. P2G of every transferred quantity at once: nodal mass (Eq. 21), momentum
    (Eq. 18), internal force (Eq. 19, with the artificial bulk viscosity q
    added to the pressure and the reference pressure p_ref taken out, sigma +
-   p_ref I; gas particles on a 2D/3D linear grid take the gradient at their
-   cell's centre, :func:`cell_centre_gradient`) and
+   p_ref I; on 2D/3D Cartesian grids (r-z: linear shape functions only) the
+   gas particles take the gradient at their cell's centre with the cell's
+   share of volume, :func:`cell_centre_gradient`;
+   void gas, :func:`void_gas`, exerts none) and
    prescribed traction (Eq. 20), as one combined
    scatter (GPU) or one fused scalar scatter per channel (CPU, see
    :func:`particle_to_grid`); body force m_I b on the grid (first term of Eq. 20).
@@ -41,7 +43,7 @@ One step of length dt (all particle loops are whole-array operations):
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
    momentum; face conditions and constraints again.
 5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28)
-   (gas particles on a 2D/3D linear grid: at the cell centre, as their force);
+   (gas particles where :func:`cell_centre_gradient` applies: at the cell centre, as their force);
    density, Eq. (29) (rho / (1 + d eps_kk); no deformation gradient is kept);
    q work heats the particle (000 Eq. 13 with p -> p + q); stress, energy and
    history by each material's model (Jaumann rate, Eq. 30, inside the model),
@@ -49,6 +51,8 @@ One step of length dt (all particle loops are whole-array operations):
    share nodes relaxed towards one pressure (only when ``Config.relax``,
    :mod:`blastfsi.mpm.relaxation`);
    new signal speed and q (ERRATA 000-10, :mod:`blastfsi.mpm.viscosity`).
+   Void gas (:func:`void_gas`) keeps its internal energy (no stress, no work)
+   and sends no signal: its velocity alone enters the step.
 
 Dimensions: positions and velocities always have 3 components. 1D is uniaxial
 strain, 2D plane strain (d eps_zz = 0). The 2D axisymmetric r-z form (Sulsky &
@@ -56,7 +60,11 @@ Schreyer, CMAME 139 (1996) 409) maps r, z, theta onto Voigt x, y, z: particle
 masses and volumes are those of the ring (V = 2 pi r * area), the hoop strain
 rate is v_r / r at the particle, d eps_thth = dt sum_I N_I v_rI / r_p, and the
 hoop stress enters the r-momentum as f_Ir -= V_p sigma_thth N_I / r_p. GIMP
-on an r-z grid uses the Cartesian uGIMP weights (no r-weighted averaging).
+on an r-z grid uses the Cartesian uGIMP weights. r-weighting them (Nairn &
+Guilkey, IJNME 101 (2015) 127) does not make the hoop rate of a uniform
+expansion v_r = a r exact near the axis: the error there comes from the
+lumped nodal velocity sum_p m_p N_Ip v_p / m_I with ring masses m_p ~ r_p, which
+over-weights the outer particles of each node's support (tests/test_mpm_gas.py).
 
 Energy: ``point.energy`` is the specific internal energy (stress work from the
 model plus q work); kinetic + internal is conserved up to the scheme's
@@ -73,12 +81,8 @@ in an atmosphere at p_ref. A constant isotropic stress has no divergence, so
 taking it out of Eq. (19) changes nothing inside the continuum; at the model's
 free faces it applies p_ref. In the discrete force it removes the particle
 quadrature's error on p_ref: a gas at p_ref then exerts exactly no force however
-its particles sit, which (i) removes the negative stiffness a uniform pressure
-has through the particles' motion in the gradient (growth ~1.05 per step for a
-GIMP air box at rest; :func:`cell_centre_gradient` for the linear grid), and
-(ii) restores the sound speed of sub-cell motion on a linear grid, K instead of
-K - p (air column: 1.86 -> 1.0005 x 2 L / c, tests/test_mpm_method.py).
-What remains is the same mechanism at the overpressure |p - p_ref|.
+its particles sit. The gas particles do not need it for a stable pressure force
+where :func:`cell_centre_gradient` applies (not GIMP on an r-z grid).
 
 ``plastic_work`` accumulates sigma_eq d(eps_p)/rho per particle,
 the plastic dissipation of a von Mises (J2) radial return (sigma' : d eps_p =
@@ -96,6 +100,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from blastfsi import xla
 from blastfsi.constitutive import Model, PointState
 from blastfsi.constitutive import tensor as T
 from blastfsi.mpm import relaxation
@@ -167,8 +172,8 @@ class NodalSource(NamedTuple):
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
                 combined_scatter: bool | None = None, model_slots=None, blend: bool = False,
                 relax=()) -> Config:
-    """Checked :class:`Config`; ``combined_scatter`` defaults to True except on
-    the CPU backend (see :func:`particle_to_grid`); ``model_slots``: per model the
+    """Checked :class:`Config`; ``combined_scatter`` defaults to the backend's
+    choice (:func:`blastfsi.xla.combined_scatter`, see :func:`particle_to_grid`); ``model_slots``: per model the
     pool slots (start, stop) its particles can occupy, or None for all (a coupled run keeps
     the structures in the first slots and the gas after them: each model then runs on its
     own part of the pool only); ``blend``: some material will have a PIC share (without it, Params.pic_fraction
@@ -180,7 +185,7 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
     if not models or not all(isinstance(m, Model) for m in models):
         raise MPMError(f"materials: expected one or more constitutive Models, got {models!r}")
     if combined_scatter is None:
-        combined_scatter = jax.default_backend() != "cpu"
+        combined_scatter = xla.combined_scatter()
     if model_slots is not None:
         model_slots = tuple((int(a), int(b)) for a, b in model_slots)
         if len(model_slots) != len(models) or any(not 0 <= a <= b for a, b in model_slots):
@@ -268,9 +273,12 @@ def wave_speed(ps: PointState, material, params: Params, config: Config, pool: b
 
 @functools.partial(jax.jit, static_argnames="config")
 def initialize(particles: Particles, params: Params, config: Config) -> State:
-    """Initial :class:`State`: the signal speeds of the active particles filled in (compiled: each model's
+    """Initial :class:`State`: the signal speeds of the active particles filled in (void gas: 0; compiled: each model's
     wave speed run eagerly made ~60 compilations of single operations in a he-slab-2d-mpm run)."""
     c = wave_speed(particles.point, particles.material, params, config)
+    void = void_gas(particles, config, particles.point.density)
+    if void is not None:  # void gas sends no signal (step)
+        c = jnp.where(void, 0.0, c)
     p = particles._replace(wave_speed=jnp.where(particles.active, c, particles.wave_speed))
     return State(particles=p, external_work=jnp.zeros((), p.mass.dtype),
                  boundary_exchange=jnp.zeros(config.grid.dim + 1, p.mass.dtype),
@@ -359,59 +367,103 @@ def materialised_stencil(P: Particles, grid: Grid, shape: Shape):
     return expand(materialise(compute, P, jnp.any(P.active)))
 
 
+VOID_DENSITY = 1.0e-4  # [kg/m^3] below it a gas particle is void (:func:`void_gas`)
+
+
+def void_gas(P: Particles, config: Config, density):
+    """The active gas (fluid-model) particles whose ``density`` is below VOID_DENSITY, or None without gas.
+
+    A void particle is kept (mass, momentum and internal energy, so every budget still closes) but exerts no
+    stress, does no work and sends no signal: its velocity alone enters the step. Why: at the edge of an
+    expanding products cloud a few particles reach 1e-8 to 3e-5 kg/m^3 with |v| + c of 10-50 km/s and set a
+    step 1.5-3x below the structure's (steel-plate-blast). Such gas is vacuum to the problem: below 1e-4 kg/m^3
+    (under 1e-4 of sea-level air's 1.225 kg/m^3), p = (gamma - 1) rho e stays under 1 kPa
+    (1 % of an atmosphere) for any internal energy below 2.5e7 J/kg, over five times TNT's heat of detonation
+    (4.5e6 J/kg, Dobratz & Crawford, LLNL Explosives Handbook, UCRL-52997, 1985), and its momentum
+    and energy are as small beside the resolved gas around it. A void particle that is compressed again
+    above the floor rejoins with the internal energy it kept (no work is booked while void)."""
+    fluids = relaxation.fluid_materials(config.models)
+    if not fluids:
+        return None
+    gas = functools.reduce(operator.or_, [P.material == k for k in fluids])
+    return gas & P.active & (density < VOID_DENSITY)
+
+
 def uses_cell_centre_gradient(config: Config) -> bool:
-    """Whether :func:`cell_centre_gradient` applies: linear shape functions, 2D or 3D, some gas material."""
-    return config.shape.name == "linear" and config.grid.dim > 1 and bool(relaxation.fluid_materials(config.models))
+    """Whether :func:`cell_centre_gradient` applies: some gas material on a 2D/3D Cartesian grid, or on an
+    r-z grid with linear shape functions (there without the cell's volume normalisation)."""
+    cartesian = not config.grid.axisymmetric
+    return (config.grid.dim > 1 and bool(relaxation.fluid_materials(config.models))
+            and (cartesian or config.shape.name == "linear"))
 
 
-def cell_centre_gradient(P: Particles, grid: Grid, config: Config, w, grad, r):
+def cell_centre_gradient(P: Particles, grid: Grid, config: Config, w, grad, r, vol):
     """The gas particles' (fluid models') shape-function gradient, weight and radius of the internal force
-    (Eq. 19, and the r-z hoop term) and of the strain increment (Eqs. 27-28) on a 2D/3D linear grid: those
-    of the centre of the particle's cell, x_c, not of x_p. Returns (grad, w_hoop, r_hoop); solids keep theirs.
+    (Eq. 19, and the r-z hoop term) and of the strain increment (Eqs. 27-28) in 2D/3D: those of the centre
+    x_c of the particle's cell, on the cell's 2^d nodes within the particle's stencil (N = 2^-d, grad N = the
+    bilinear / trilinear one at x_c), whatever the shape functions of its mass and momentum; and ``fill``,
+    the factor min(1, V_c / sum_{q in c} V_q) (all particles whose centre lies in the cell; V_c the cell's
+    volume h^d) that scales the gas particle's quadrature weight V_p in Eq. (19)
+    and its strain increment alike. Returns (grad, w_hoop, r_hoop, fill); solids keep theirs (fill 1).
 
-    Why: about a gas at rest at pressure p (stress -p I; bulk modulus K = rho c^2; displacement u, the
+    Applies on Cartesian grids, whatever the shape functions, and on r-z grids with linear shape functions
+    only, there with fill = None (the particles' own V_p). On an r-z grid a cfdmp box's gas at rest became
+    unstable with it (air at 1 bar, 16 x 16 cells of 1 mm, the box on the axis: ~100 m/s after 1500 steps
+    with GIMP, with or without the fill; an ``mpm`` r-z box with slip walls stayed at rest): not traced, so
+    r-z GIMP gas keeps its own gradient and the slow growth of the quadrature's negative stiffness.
+
+    Why. About a gas at rest at pressure p (stress -p I; bulk modulus K = rho c^2; displacement u, the
     particles moving with the grid), the Eq. (19) force f_I = sum_p V_p p_p grad N_I(x_p) linearises to
 
         delta f_I = -sum_p V_p (K - p) (div u)_p grad N_I(x_p)  +  p sum_p V_p [grad grad N_I](x_p) u_p,
 
     the first term from the particle's pressure and volume (Eq. 29), the second from the particle moving
     through the position-dependent gradient. In the continuum the second integrates by parts to
-    +p int (div u) grad N_I and the stiffness is K (div u)^2. The bilinear (trilinear) grad N_I is
-    discontinuous across cell faces; the particles sample only its in-cell part (grad grad N_I = the
-    mixed derivatives, +-1/h^2), so the stiffness they give is sum_p V_p [(K - p)(div u)^2 - p u . grad(div u)]_p,
-    whose second part is indefinite: M^-1 K has eigenvalues down to -p / (rho h^2), an exponential
-    growth at a rate up to sqrt(p / rho) / h per unit time, whatever dt, q or the particle layout (air at
-    1 bar, h = 1 mm: 2.7e5-2.9e5 1/s in the linearised grid model, 1.5e5-2.1e5 1/s measured, i.e. 1.31 per
-    step at cfl 0.5: ~100 m/s after ~200 steps from round-off, docs/cfdmp.md). In 1D grad N is constant
-    in a cell and the term is absent.
+    +p int (div u) grad N_I and the stiffness is K (div u)^2; the particle quadrature does not integrate it
+    by parts exactly (the bilinear gradient jumps at cell faces; uGIMP's particle domains do not deform), and
+    what is left is indefinite: the uniform pressure has a negative stiffness, growth at a rate up to
+    sqrt(p / rho) / h per unit time whatever dt (air at 1 bar, 1 mm cells: 1.31 per step at cfl 0.5 with
+    linear shape functions, 1.05 with GIMP, ~1.0095 in a cfdmp box; docs/cfdmp.md).
 
-    With the cell-centre gradient (the cell's mean dilatation: Nagtegaal, Parks & Rice, CMAME 4 (1974)
-    153; Hughes, IJNME 15 (1980) 1413, B-bar; FLIP's cell-centred pressure, Brackbill & Ruppel, JCP 65
-    (1986) 314) used for both the force and the particle's volume change, the force of a pressure field no
-    longer depends on where the particles sit in their cells, and the stiffness is
-    sum_c (sum_{p in c} V_p) (K - p) (div u(x_c))^2 >= 0 for K >= p (ideal gas: K = gamma p): the gas at
-    rest is neutrally stable, as on a 1D linear grid (same stiffness there). K - p, not K: particles that
-    expand in place overfill their cell, and without the position-dependent gradient nothing takes that
-    back until they cross into the next cell, so sub-cell (small-amplitude) sound runs at c sqrt(1 - p / K)
-    on a linear grid (air: 0.53 c, period ratio 1.87; measured fundamental period of an air column: 1.88 x
-    2 L / c on 20 cells in 1D, 1.90 on 10 cells in 2D with this change); GIMP's continuous gradient
-    supplies the missing p (1.01 / 1.04). The nodal
-    forces of a gas at rest are unchanged where a cell's particles sit symmetrically about its centre
-    (grad N_I is linear in the other coordinates within a cell). Force and volume change use the same
-    gradient: the pressure's power on nodal velocities v_I, sum_p V_p p_p div v(x_c), is the work the
-    particle's energy update books for them (up to the MUSL re-map, as before). In r-z the hoop term's
-    N_I / r is taken at the cell centre too (N_I(x_c) = 1/4, r_c).
+    (i) The cell-centre gradient (the cell's mean dilatation: Nagtegaal, Parks & Rice, CMAME 4 (1974) 153;
+    Hughes, IJNME 15 (1980) 1413, B-bar; FLIP's cell-centred pressure, Brackbill & Ruppel, JCP 65 (1986)
+    314) does not depend on where the particles sit in their cells: the second term is gone. (ii) With V_p
+    alone the first would be sum_c (sum_{p in c} V_p) (K - p) (div u(x_c))^2, >= 0 for K >= p (ideal gas:
+    K = gamma p), but particles that expand in place overfill their fixed cell and sub-cell sound ran at
+    c sqrt(1 - p / K) = 0.53 c for air. The cell's force is the integral over the cell, so an overfilled
+    cell's weights are normalised to its volume, sum_{p in c} fill V_p = V_c, which does not vary with the
+    particles' expansion: stiffness K there. An underfilled cell (particles compressed in place, a free
+    surface, a lone particle) keeps V_p: normalised up it would stiffen its particles by the factor
+    V_c / sum V_q (their signal speed by as much, beyond the CFL step; steel-plate-blast stopped at 39 us in
+    the reflected shock in front of the plate). So sub-cell sound is at K when expanding, K - p when
+    compressing in place: period 1.22 x 2 L / c for an air column in 2D, linear or GIMP (1.86 / 1.00 with
+    V_p and the cell-centre / the particle's GIMP gradient; 1.00 with ``reference_pressure`` at the
+    ambient, which takes p out of K - p). (iii) Force and volume change use the same gradient and weight, so
+    the pressure's power on the nodal velocities, sum_p fill V_p p_p div v(x_c), is the work each particle's
+    energy update books (up to the MUSL re-map, as before): energy stays conserved. A uniform gas at rest
+    whose particles sit symmetrically in their cells has the same nodal forces as with its own gradients.
+    In r-z the hoop term's N_I / r is taken at the cell centre too (N_I(x_c) = 1/4, r_c).
     """
-    d, h = grid.dim, grid.cell_size
+    d, h, shape = grid.dim, grid.cell_size, config.shape
     fluids = relaxation.fluid_materials(config.models)
     gas = functools.reduce(operator.or_, [P.material == k for k in fluids]) & P.active
-    offset = np.array([[(s >> (d - 1 - j)) & 1 for j in range(d)] for s in range(2 ** d)])  # stencil order (expand)
-    grad = tuple(jnp.where(gas, jnp.asarray((2.0 * offset[:, j] - 1.0) / (h * 2 ** (d - 1)))[:, None], grad[j])
-                 for j in range(d))
+    per_dim, cell = [], []
+    for j in range(d):  # the cell's nodes within the particle's stencil: N = 1/2, dN/dx = -+1/h there, else 0
+        xi = (P.x[:, j] - grid.origin[j]) / h
+        first = shape.basis(xi, P.half_size[:, j] / h, grid.cells[j])[0]
+        c = linear_cell(xi, grid.cells[j]).astype(first.dtype)
+        cell.append(c)
+        a = jnp.arange(shape.nodes_per_dim, dtype=first.dtype)[:, None] - (c - first)[None, :]
+        per_dim.append((a, jnp.where((a == 0) | (a == 1), 0.5, 0.0),  # (the node indices are not used)
+                        jnp.where(a == 0, -1.0 / h, jnp.where(a == 1, 1.0 / h, 0.0))))
+    _, w_c, grad_c = expand(per_dim)
+    grad = tuple(jnp.where(gas, grad_c[j], grad[j]) for j in range(d))
     if not grid.axisymmetric:
-        return grad, w, r
-    first = linear_cell((P.x[:, 0] - grid.origin[0]) / h, grid.cells[0])
-    return grad, jnp.where(gas, 1.0 / 2 ** d, w), jnp.where(gas, grid.origin[0] + (first + 0.5) * h, r)
+        flat = functools.reduce(lambda acc, j: acc * grid.cells[j] + cell[j], range(1, d), cell[0])
+        filled = jax.ops.segment_sum(vol, flat, num_segments=int(np.prod(grid.cells)))[flat]  # sum_{q in c} V_q
+        return grad, w, r, jnp.where(gas, jnp.minimum(h ** d / jnp.where(gas, filled, 1.0), 1.0), 1.0)
+    r_c = grid.origin[0] + (cell[0] + 0.5) * h
+    return grad, jnp.where(gas, w_c, w), jnp.where(gas, r_c, r), None
 
 
 def step(state: State, dt, params: Params, config: Config, source: NodalSource | None = None) -> State:
@@ -431,22 +483,26 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     m = jnp.where(act, P.mass, 0.0)
     vol = jnp.where(act, P.mass / P.point.density, 0.0)  # m_p / rho_p of Eq. (19)
     r = jnp.where(act, P.x[:, 0], 1.0)  # radius (axisymmetric)
-    w_hoop, r_hoop = w, r
-    if uses_cell_centre_gradient(config):  # gas on a 2D/3D linear grid: a stable pressure force
-        grad, w_hoop, r_hoop = cell_centre_gradient(P, grid, config, w, grad, r)
+    w_hoop, r_hoop, fill = w, r, None
+    if uses_cell_centre_gradient(config):  # gas in 2D/3D: a stable pressure force
+        grad, w_hoop, r_hoop, fill = cell_centre_gradient(P, grid, config, w, grad, r, vol)
     stress = P.point.stress
 
     def sigma(i, j):  # q raises the pressure (ERRATA 000-10); the atmosphere's p_ref is taken out
         return _component(stress, i, j) + ((params.reference_pressure - P.q) if i == j else 0.0)
 
     # Eq. (19): f_iI = -sum_p V_p sigma_ij dN_I/dx_j ; Eq. (20): + N_I V_p t_i / h
+    vol_f = vol if fill is None else vol * fill  # the stress's quadrature weight
+    void = void_gas(P, config, P.point.density)
+    if void is not None:  # void gas exerts no stress
+        vol_f = jnp.where(void, 0.0, vol_f)
     forces = []
     for i in range(d):
         f = (vol * P.surface_load[:, i]) * w
         for j in range(d):
-            f = f - (vol * sigma(i, j)) * grad[j]
+            f = f - (vol_f * sigma(i, j)) * grad[j]
         if grid.axisymmetric and i == 0:
-            f = f - (vol * sigma(2, 2) / r_hoop) * w_hoop  # hoop stress in the r-momentum
+            f = f - (vol_f * sigma(2, 2) / r_hoop) * w_hoop  # hoop stress in the r-momentum
         forces.append(f)
     mw = m * w
     channels = [mw] + [mw * P.v[:, i] for i in range(d)] + forces
@@ -514,6 +570,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     # rows kept in memory (materialise): fused into the (n, 3, 3) increments, XLA:CPU gathered and summed
     # each of their elements on its own (the 3D Johnson-Cook step ~1.3x slower, measured)
     rows = materialise(velocity_gradient, (v2_I, idx, grad, w_hoop, r_hoop))
+    if fill is not None:  # the gas particle's share of its cell's volume change (cell_centre_gradient)
+        rows = rows * fill
     L = {ij: rows[k] for k, ij in enumerate(pairs)}
     if grid.axisymmetric:
         L[2, 2] = rows[-1]
@@ -531,6 +589,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
     # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the gas
     energy = ps.energy - P.q * dvol / ps.density + blend_heat
+    if void is not None:  # void gas does no work
+        energy = jnp.where(void, ps.energy + blend_heat, energy)
     # the models read the increments many times: materialised, not recomputed from the gathers in each read
     # (measured, 3D Johnson-Cook: the step 1.25x faster)
     model_in = materialise(lambda a: a, (ps._replace(density=rho, energy=energy), dstrain, dspin), jnp.any(act))
@@ -538,6 +598,10 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     c = wave_speed(new, P.material, params, config, pool=True)
     rate = dvol / dt
     q = bulk_viscosity(rho, c, rate, grid.cell_size, params.q_quadratic, params.q_linear)
+    if void is not None:  # void now: no stress, and no signal but its velocity in the next step's CFL
+        new = new._replace(stress=jnp.where(void[:, None], 0.0, new.stress), energy=jnp.where(void, energy, new.energy))
+        void_next = void_gas(P, config, rho)
+        c, q, rate = (jnp.where(void_next, 0.0, a) for a in (c, q, rate))
     d_plastic = new.plastic_strain - ps.plastic_strain
     plastic_work = P.plastic_work + T.von_mises(T.deviator(new.stress)) * d_plastic / rho
     point = jax.tree_util.tree_map(lambda a, b: _select(act, a, b), new, ps)
@@ -546,7 +610,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         wave_speed=jnp.where(act, c, P.wave_speed), plastic_work=jnp.where(act, plastic_work, P.plastic_work))
     load = m[:, None] * params.gravity + vol[:, None] * P.surface_load
     # the atmosphere's work on the model, -p_ref dV, with dV the particles' volume change (Eq. 29)
-    expansion = jnp.sum(jnp.where(act, m / point.density, 0.0)) - jnp.sum(vol)
+    felt = act if void is None else act & ~void  # the volumes the atmosphere pushed on (void gas: none)
+    expansion = jnp.sum(jnp.where(felt, m / point.density - vol, 0.0))
     work = jnp.sum(load * (x_p - P.x)) - params.reference_pressure * expansion
     return State(particles=particles, external_work=state.external_work + work, boundary_exchange=exchange,
                  reaction=reaction)
