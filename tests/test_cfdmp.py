@@ -588,7 +588,7 @@ def test_axisymmetric_gas_at_rest_stays_at_rest(lower, upper):
 @pytest.mark.slow  # ~3 min on 2 cores
 def test_steel_plate_blast_starts_as_the_paper_case():
     """Seed 000 Sec. 5.4 case 1 (``steel-plate-blast``) to 0.1 ms: the plate's centre is driven away from the
-    charge at ~100 m/s (its peak deflection at ~0.4 ms is in docs/cfdmp.md), the clamped rim does not move,
+    charge at ~100 m/s (its peak deflection at ~0.4 ms is in docs/validation.md), the clamped rim does not move,
     the plate stays elastic-plastic without damage, and the mass budget closes to round-off."""
     res = blastfsi.run("steel-plate-blast", set={"time.end": 1e-4, "output.fields": 0, "output.plots": False,
                                                   "output.tracers": [[0.0, 0.105], [0.27, 0.105]]})

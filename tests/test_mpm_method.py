@@ -181,7 +181,7 @@ def test_gas_at_rest_stays_at_rest_with_linear_shape_functions(axisymmetric):
 def test_gimp_air_in_motion_stays_bounded_with_the_reference_pressure():
     """Air at 1 bar sloshing at 1 m/s in a 2D slip-wall box (12 x 12 cells of 1 mm, 2 x 2 particles per cell),
     GIMP, ~880 steps. With absolute stresses the uniform 1 bar has a negative stiffness through the particle
-    quadrature of GIMP (docs/cfdmp.md: growth ~1.05 per step; this run stops non-physical at step 737).
+    quadrature of GIMP (docs/theory/cfdmp.md: growth ~1.05 per step; this run stops non-physical at step 737).
     With numerics.reference_pressure = 1 bar the force sees only the acoustic overpressure (~+-400 Pa): the
     sloshing stays bounded (measured max |v| 0.64 m/s at the end, 0.05 m/s after 7266 steps) and the energy
     balance (with the atmosphere's work) closes to the scheme's dissipation (measured -5.4e-7)."""

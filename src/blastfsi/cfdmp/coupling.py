@@ -298,7 +298,7 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     p_p dN_I/dn only, a fraction phi_I = sum_p N_Ip V_p / (A h / 2) of p_I A: the mirror continues that, so
     the traction is scaled by clip(phi_I / FULL_FILL, 0, 1) (whole for a node at least half full: a gas
     that fills space, however it moves, keeps the exact balance of a uniform state). *Found*: in
-    steel-plate-blast with a smaller PIC share for the slow gas (docs/cfdmp.md) a products particle alone
+    steel-plate-blast with a smaller PIC share for the slow gas (docs/theory/cfdmp.md) a products particle alone
     by the flow-out face r = 0.3 m (phi ~ 0.02) was kicked back and forth by the whole traction of its own
     pressure and heated by its compression from 8e7 to 2e10 J/kg in 120 steps until the run stopped."""
     cfg = static.mpm
@@ -500,7 +500,7 @@ def _two_phase_split(moved_m, partial, alpha, V, rho_donor):
     layer leaving the box), one material's balance is a debt larger than what the cell beyond the face still
     holds of it. Taken as it stood it drove that cell's partial density and products fraction below zero
     (steel-plate-blast with pure FLIP gas: alpha = -0.001 under the box face for ~15 steps, then c^2 < 0 in
-    that cell and the run stopped at 0.208 ms, docs/cfdmp.md). So a debt takes at most half of the cell's
+    that cell and the run stopped at 0.208 ms, docs/theory/cfdmp.md). So a debt takes at most half of the cell's
     partial density of its material, and the rest of it is taken from the other material: the settled
     total mass, momentum and energy are unchanged (the budget books the materials' sum); only the split
     between products and air moves, by at most the scheme's composition mismatch.
@@ -578,7 +578,7 @@ def cut_at_coupled_faces(x, half, lo, hi, static: Static):
     The share beyond leaves to the face cell's reservoir and the particle keeps the part inside. So the
     particles never overlap the ring cells beyond the face, which stand for that gas on the interface nodes
     (000 Eqs. 37-39), and the gas leaves at the rate it crosses the face instead of one particle at a time
-    (docs/cfdmp.md)."""
+    (docs/theory/cfdmp.md)."""
     d = static.mpm.grid.dim
     h = static.mpm.grid.cell_size
     share = jnp.zeros(x.shape[:1], x.dtype)

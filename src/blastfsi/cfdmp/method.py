@@ -31,6 +31,7 @@ from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_row, tracer_summary
 from blastfsi.problems import cfdmp as problem
+from blastfsi.problems import euler as euler_problem
 
 
 class State(NamedTuple):
@@ -177,7 +178,7 @@ class Cfdmp:
         info = setup.info
         nd = e.grid.ndim
         grid = setup.grid
-        kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype))
+        kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype), euler_problem.blast_params(e, dtype))
         mp = mpm.make_params(setup.model_params, cfl=info["mpm_cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
                              pic_fraction=info["pic_fraction"], reference_pressure=info["mpm_reference_pressure"],
                              dtype=dtype)
@@ -257,8 +258,10 @@ class Cfdmp:
         zeros = jnp.zeros(n + d + 1, dtype)
         maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
+        clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
+        clock["t"] = jnp.asarray(setup.euler.info.get("remap_time", 0.0), dtype)
         state = State(U, *maps, mpm=ms, reservoirs=res, budget=budget, coupled=jnp.asarray(False), baseline=zeros,
-                      displaced=zeros, **timeloop.clock(n_samples, n_cols, dtype))
+                      displaced=zeros, **clock)
         if setup.info["activation_overpressure"] == 0.0:
             state = jax.jit(_activate, static_argnums=2)(state, prm, cs)
         return state
@@ -284,7 +287,7 @@ class Cfdmp:
 
         # each branch returns the new state and the viewed grid (blast maps), one gas P2G per step
         def euler_only(s, dt):
-            s = s._replace(U=ek.step(s.U, dt, params.euler, cfg))
+            s = s._replace(U=ek.step(s.U, dt, params.euler, cfg, s.t))
             dp = cp.flat_primitives(s.U, params.euler.eos, cfg)["pressure"][lay.ring_cells] - params.reference_pressure
             hot = jnp.max(dp, initial=-jnp.inf) > params.activation  # (no ring cells: MPM everywhere)
             s = jax.lax.cond(hot, lambda s: _activate(s, params, cs), lambda s: s, s)
@@ -313,6 +316,7 @@ class Cfdmp:
             prim = cp.flat_primitives(s.U, eos, cfg)
             ms, budget = mpm_step(s, dt, cp.interface_source(prim, lay, cs, pref))
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
+            U, budget = _blast_inflow(U, ek.with_blast(U, s.t, dt, params.euler, cfg), budget, lay, cs)
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, budget, cs, lay)
             U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
@@ -489,16 +493,13 @@ class Cfdmp:
     def summary(self, sc: CfdmpScenario, setup: problem.Setup, hist: dict, state: State) -> dict:
         e = setup.euler
         t = float(state.t)
-        # a charge run starts at the remap time (simulated time 0): arrival times are from the detonation, as
-        # the euler method reports them
-        t0 = float(e.info.get("remap_time", 0.0))
         gauges = []
         for pos, cell in zip(e.gauges, e.gauge_cells):
             arrival, end = float(state.arrival[cell]), float(state.end[cell])
             region = "euler" if setup.outside[cell] else ("particles" if setup.fictitious[cell] else "bridge")
             gauges.append({"position": [float(v) for v in pos], "region": region,
                            "peak_overpressure": float(state.peak[cell]), "impulse": float(state.impulse[cell]),
-                           "arrival_time": t0 + arrival if np.isfinite(arrival) else None,
+                           "arrival_time": arrival if np.isfinite(arrival) else None,
                            "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None})
         coupled = np.asarray(hist["coupled"]) > 0.5
         n = len(e.materials)
@@ -507,7 +508,8 @@ class Cfdmp:
         baseline = np.asarray(state.baseline)
         out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
                "dx": e.grid.dx, "bridge_cells": setup.info["bridge_cells"],
-               **({"remap_time": t0, "one_d_air_zone": e.info["one_d_air_zone"]} if "remap_time" in e.info else {}),
+               **({"remap_time": e.info["remap_time"], "one_d_air_zone": e.info["one_d_air_zone"]}
+                  if "remap_time" in e.info else {}),
                "coupled_faces": setup.info["coupled_faces"],
                "activation_time": float(hist["time"][np.argmax(coupled)]) if coupled.any() else None,
                "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,
@@ -573,35 +575,40 @@ class Cfdmp:
 
         from blastfsi.plotting.fields import plot_particle_damage, plot_pressure_field
         from blastfsi.plotting.histories import gauge_histories, tracer_histories
+        from blastfsi.plotting.units import scale, text
 
         folder.mkdir(parents=True, exist_ok=True)
-        t0 = float(setups[0].euler.info.get("remap_time", 0.0))  # (a charge: the run starts at its remap)
+        labels = ("r", "z") if sc.domain.geometry == "axisymmetric" else AXES
         if sc.output.gauges:
-            gauge_histories(folder / "gauges.png", histories, sc.output.gauges, t0)
+            gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
         if sc.output.tracers:
-            tracer_histories(folder / "tracers.png", histories, sc.output.tracers, AXES[:sc.domain.ndim], t0)
+            nd = sc.domain.ndim  # (the history's columns are named x, y, z in r-z too)
+            tracer_histories(folder / "tracers.png", histories, sc.output.tracers, AXES[:nd], labels=labels[:nd])
         grid = finals[0].grid
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],
-                            grid.cell_fields["pressure"], title=f"{sc.name}: pressure [Pa] at t = {sc.time.end:g} s",
+                            grid.cell_fields["pressure"], axis_labels=labels,
+                            title=f"{sc.name}: pressure at t = {text(sc.time.end, 'time')}",
                             z_plane=sc.output.plot_plane_z)
         particles = finals[0].particles
         solid = particles.point_fields["structure"] == 1.0
         if solid.any():
             plot_particle_damage(folder / "damage.png", particles.positions[solid],
                                  particles.point_fields["damage"][solid], cell_size=setups[0].grid.cell_size,
-                                 title=f"{sc.name}: structure damage at t = {sc.time.end:g} s",
+                                 axis_labels=labels,
+                                 title=f"{sc.name}: structure damage at t = {text(sc.time.end, 'time')}",
                                  z_plane=sc.output.plot_plane_z)
             if sc.initial.kind == "charge" and "compressive_damage" in particles.point_fields:
                 _face_damage_plot(folder / "faces.png", sc, particles, setups[0].grid.cell_size)
         h = histories[0]
+        ts = scale(h["time"], "time")
         fig, ax = plt.subplots(figsize=(6, 4))
-        ax.plot(h["time"] * 1e3, h["mass_budget_residual"], label="mass")
-        ax.plot(h["time"] * 1e3, h["energy_transport_residual"], label="energy, transport")
-        ax.plot(h["time"] * 1e3, h["energy_budget_residual"], label="energy, coupling error")
+        ax.plot(h["time"] / ts.factor, h["mass_budget_residual"], label="mass")
+        ax.plot(h["time"] / ts.factor, h["energy_transport_residual"], label="energy, transport")
+        ax.plot(h["time"] / ts.factor, h["energy_budget_residual"], label="energy, coupling error")
         for key in h:
             if key.startswith("momentum_") and key.endswith("_budget_residual"):
-                ax.plot(h["time"] * 1e3, h[key], "--", label=f"momentum {key.split('_')[1]}, coupling error")
-        ax.set_xlabel("time [ms]"), ax.set_ylabel("budget residual (relative)"), ax.legend(fontsize=7)
+                ax.plot(h["time"] / ts.factor, h[key], "--", label=f"momentum {key.split('_')[1]}, coupling error")
+        ax.set_xlabel(ts.label("time")), ax.set_ylabel("budget residual (relative) [-]"), ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(folder / "budget.png", dpi=120)
@@ -615,6 +622,7 @@ def _face_damage_plot(png, sc: CfdmpScenario, particles, cell_size: float) -> No
     """plots/faces.png: the failure (damage 1) on the concrete's face toward the charge and the tensile damage
     on the opposite face, in the reference configuration (000 Fig. 14)."""
     from blastfsi.plotting.fields import plot_face_damage
+    from blastfsi.plotting.units import text
 
     f = particles.point_fields
     concrete = ~np.isnan(f["compressive_damage"])
@@ -634,7 +642,7 @@ def _face_damage_plot(png, sc: CfdmpScenario, particles, cell_size: float) -> No
                            (f"{back} face: tensile damage D_t", lateral[back_layer],
                             f["tensile_damage"][concrete][back_layer])],
                      axisymmetric=sc.domain.geometry == "axisymmetric",
-                     title=f"{sc.name}: concrete faces at t = {sc.time.end:g} s (reference positions)")
+                     title=f"{sc.name}: concrete faces at t = {text(sc.time.end, 'time')} (reference positions)")
 
 
 BACK_FACE_THRESHOLDS = (0.5, 0.75, 0.99)  # of the tensile damage D_t (concrete-25mpa spalls at 0.99)
@@ -695,6 +703,22 @@ def _loaded_faces(sc: CfdmpScenario, setup: problem.Setup, state: State) -> list
                     "back_face_tensile_damage": face(fields["tensile_damage"], back, thresholds=BACK_FACE_THRESHOLDS)})
     return out
 
+
+
+def _blast_inflow(U, U_fed, budget: cp.Budget, lay: cp.Layout, cs: cp.Static):
+    """(U_fed, budget): the blast layer's change of the Eulerian-only cells' content (mass per material,
+    momentum, energy; see :func:`system_totals`) booked as inflow through the domain boundary."""
+    cfg = cs.euler
+    n, d = cfg.n_materials, len(cfg.shape)
+    k = ek.config.layout(cfg)
+    V = lay.cell_volume.reshape(cfg.shape)
+    axes = tuple(range(1, U.ndim))
+
+    def content(X):
+        rows = jnp.concatenate([X[:n], X[k.mom:k.mom + d], X[k.energy:k.energy + 1]])
+        return jnp.sum(jnp.where(lay.outside, rows * V, 0.0), axis=axes)
+
+    return U_fed, budget._replace(boundary_out=budget.boundary_out - (content(U_fed) - content(U)))
 
 
 def _activate(s: State, params: Params, cs: cp.Static) -> State:

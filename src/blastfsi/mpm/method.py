@@ -250,41 +250,63 @@ class MPM:
 
     def plots(self, folder: Path, sc: MPMScenario, setups: list, histories: list[dict], members: list[dict],
               finals: list) -> None:
-        """Energy histories of every member, tracer displacements and the final particles of member 0
-        coloured by pressure."""
+        """Energy histories of every member, tracer displacements, the final particles of member 0 coloured
+        by pressure (1D: the pressure profile) and, with a damage model, the final damage (1D: the profiles
+        of damage and of the models' tensile and compressive damage, which show a spall plane)."""
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
+        from blastfsi.plotting.common import plain, save
+        from blastfsi.plotting.fields import plot_particle_damage
         from blastfsi.plotting.histories import tracer_histories
+        from blastfsi.plotting.units import scale, text
 
         folder.mkdir(parents=True, exist_ok=True)
+        axes = ("r", "z") if sc.grid.axisymmetric else AXES[:sc.grid.ndim]
         if sc.output.tracers:
-            tracer_histories(folder / "tracers.png", histories, sc.output.tracers,
-                             ("r", "z") if sc.grid.axisymmetric else AXES[:sc.grid.ndim])
+            tracer_histories(folder / "tracers.png", histories, sc.output.tracers, axes)
+        quantities = ("kinetic_energy", "internal_energy", "plastic_work")
+        ts = scale(np.concatenate([h["time"] for h in histories]), "time")
+        es = scale(np.concatenate([h[q] for h in histories for q in quantities]), "energy")
+        per = _energy_unit(setups[0], "J")[1:]  # ("/m^2" in 1D, "/m" in plane 2D)
         fig, ax = plt.subplots(figsize=(6, 4))
         for k, h in enumerate(histories):
-            for q in ("kinetic_energy", "internal_energy", "plastic_work"):
-                ax.plot(h["time"], h[q], label=f"{q} (member {k})" if len(histories) > 1 else q)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("energy")
+            for q in quantities:
+                ax.plot(h["time"] / ts.factor, h[q] / es.factor, label=f"{q} (member {k})" if len(histories) > 1 else q)
+        ax.set_xlabel(ts.label("time"))
+        ax.set_ylabel(f"energy [{es.unit}{per}]")
+        plain(ax.xaxis, ax.yaxis)
         ax.legend(fontsize=7)
         fig.tight_layout()
-        fig.savefig(folder / "energies.png", dpi=120)
-        plt.close(fig)
+        save(fig, folder / "energies.png")
         snap = finals[0]
+        pos, f = snap.positions, snap.point_fields
+        when = f"t = {text(sc.time.end, 'time')}"
+        ls, ps = scale(pos, "length"), scale(f["pressure"], "pressure")
         fig, ax = plt.subplots(figsize=(6, 4))
-        pos = snap.positions
-        y = pos[:, 1] if pos.shape[1] > 1 else np.zeros(len(pos))
-        art = ax.scatter(pos[:, 0], y, c=snap.point_fields["pressure"], s=2, cmap="viridis")
-        fig.colorbar(art, ax=ax, label="pressure [Pa]")
-        ax.set_aspect("equal" if pos.shape[1] > 1 else "auto")
-        ax.set_xlabel("r [m]" if sc.grid.axisymmetric else "x [m]")
-        ax.set_title(f"{sc.name}: t = {sc.time.end:g} s")
+        if pos.shape[1] == 1:
+            order = np.argsort(pos[:, 0])
+            ax.plot(pos[order, 0] / ls.factor, f["pressure"][order] / ps.factor, ".-", ms=2, lw=0.8)
+            ax.set_ylabel(ps.label("pressure")), ax.grid(alpha=0.3)
+        else:
+            art = ax.scatter(pos[:, 0] / ls.factor, pos[:, 1] / ls.factor, c=f["pressure"] / ps.factor, s=2,
+                             cmap="viridis")
+            bar = fig.colorbar(art, ax=ax, label=ps.label("pressure"))
+            plain(bar.ax.yaxis)
+            ax.set_aspect("equal")
+            ax.set_ylabel(ls.label(axes[1]))
+        ax.set_xlabel(ls.label(axes[0]))
+        plain(ax.xaxis, ax.yaxis)
+        ax.set_title(f"{sc.name}: {when}")
         fig.tight_layout()
-        fig.savefig(folder / "particles.png", dpi=120)
-        plt.close(fig)
+        save(fig, folder / "particles.png")
+        if np.any(f["damage"] > 0.0) or "tensile_damage" in f:
+            profiles = {name.replace("_", " "): f[name] for name in ("tensile_damage", "compressive_damage")
+                        if name in f and pos.shape[1] == 1}
+            plot_particle_damage(folder / "damage.png", pos, f["damage"], cell_size=setups[0].grid.cell_size,
+                                 axis_labels=axes, title=f"{sc.name}: damage at {when}", profiles=profiles)
 
 
 def zero_crossing_period(t: np.ndarray, signal: np.ndarray):

@@ -6,7 +6,7 @@ both from a mixed Eulerian cell) both take the same volumetric strain: an iso-st
 stiffer of the two there (rho c^2 = gamma p ~ 47 MPa for air at 34 MPa, ~ 27 MPa for the products at
 21 MPa), so a decelerating contact over-compresses it: in he-slab-2d (w = 5, 2 mm, 10 us after the
 remap) air particles next to products stood at 44 MPa while the products beside them held 21 MPa,
-and the mixed cells this made lifted gauge 2's peak 10-13 % above gauge 1's (docs/cfdmp.md, step 11).
+and the mixed cells this made lifted gauge 2's peak 10-13 % above gauge 1's (docs/theory/cfdmp.md, step 11).
 The Eulerian cells assume pressure equilibrium between the phases they hold (the mixture closure of
 ERRATA 000-9); this kernel gives the particles the same: an instantaneous mechanical relaxation (Saurel
 & Abgrall, JCP 150 (1999) 425) that exchanges volume between the gas particles of a node at the node's

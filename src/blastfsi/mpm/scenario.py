@@ -42,9 +42,9 @@ FacePair = Annotated[list[FaceKind], Field(min_length=2, max_length=2)]
 class Boundaries(Strict):
     """Kind of each grid face, [lower, upper] per axis."""
 
-    x: FacePair = ["free", "free"]
-    y: FacePair = ["free", "free"]
-    z: FacePair = ["free", "free"]
+    x: FacePair = Field(["free", "free"], description="kinds of the lower and upper x faces (r of an r-z grid)")
+    y: FacePair = Field(["free", "free"], description="kinds of the lower and upper y faces (z of an r-z grid)")
+    z: FacePair = Field(["free", "free"], description="kinds of the lower and upper z faces")
 
 
 class GridSpec(Strict):
@@ -77,7 +77,8 @@ class Body(Strict):
     of ``radius`` around ``center``; 3D: axis along z through ``center`` (its mid-point),
     ``length`` along z; axisymmetric: a box r in [0, radius], z in center +- length/2)."""
 
-    shape: Literal["box", "cylinder"] = "box"
+    shape: Literal["box", "cylinder"] = Field("box", description="a box (lower, upper) or a cylinder (center, "
+                                                                 "radius, length)")
     lower: Optional[list[Coordinate]] = Field(None, min_length=1, max_length=3, description="box lower corner [m]")
     upper: Optional[list[Coordinate]] = Field(None, min_length=1, max_length=3, description="box upper corner [m]")
     center: Optional[list[Coordinate]] = Field(None, min_length=2, max_length=3, description="cylinder centre [m]")
@@ -161,7 +162,7 @@ class MPMNumerics(SharedNumerics):
         "(sigma + p_ref I; in cfdmp the Eulerian cells acting as particles too), so a gas at p_ref is in "
         "equilibrium however its particles sit, and free faces carry p_ref; in mpm its work -p_ref dV is booked "
         "in external_work. Set it to the ambient air's pressure when air is modelled with particles: with "
-        "numerics.shape = 'gimp' an air body at rest is otherwise unstable (docs/cfdmp.md); 0: absolute stresses"))
+        "numerics.shape = 'gimp' an air body at rest is otherwise unstable (docs/theory/cfdmp.md); 0: absolute stresses"))
 
 
 class Tracers(Strict):

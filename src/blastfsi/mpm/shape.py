@@ -49,7 +49,7 @@ def inside_grid(xi, half, cells):
     would fall on nodes that do not exist: without the truncation the weights no longer sum to 1 and the
     gradients to 0, so a particle pressed against a wall face, or leaving through a free one, was pushed by
     its own stress (a block thrown at a fixed face: the particles' momentum change 15 % off the wall's
-    reaction, tests/test_mpm.py; docs/cfdmp.md, fragments leaving the box)."""
+    reaction, tests/test_mpm.py; docs/theory/cfdmp.md, fragments leaving the box)."""
     lo, hi = jnp.maximum(xi - half, 0.0), jnp.minimum(xi + half, float(cells))
     past = (xi - half < 0.0) | (xi + half > cells)
     return jnp.where(past, 0.5 * (lo + hi), xi), jnp.where(past, jnp.maximum(0.5 * (hi - lo), 1e-6 * half), half)
