@@ -231,7 +231,7 @@ def test_blocked_sweeps_equal_the_whole_grid(scheme, case, monkeypatch):
     assert not np.array_equal(whole[0], U)  # the step did change the state
 
 
-@pytest.mark.parametrize("scheme", [euler.LAX_WENDROFF, euler.HLLC_MUSCL])
+@pytest.mark.parametrize("scheme", [pytest.param(euler.LAX_WENDROFF, marks=pytest.mark.slow), euler.HLLC_MUSCL])
 def test_accelerator_control_flow_gives_the_same_step(scheme, monkeypatch):
     """Where a conditional or a loop iteration costs a host round trip (a GPU), the kernels select
     between computed branches and unroll the operator and stage loops (blastfsi.xla); forced here on
