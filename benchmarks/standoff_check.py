@@ -13,7 +13,9 @@ coarse for the reflected peak, so the KB check (``--part kb``) also runs the sta
 grids in a narrow domain (radius and depth about D / 10: the axis gauge's peak comes before any relief
 from the side or the blast face reaches it), to the KB arrival plus 0.2 positive phases.
 
-    .venv/bin/python benchmarks/standoff_check.py [--part pairs kb] [--z 1 2 5] [--out benchmarks/standoff_check.json]
+    .venv/bin/python benchmarks/standoff_check.py [--part pairs kb] [--z 1 2 5] [--dx DX] [--out benchmarks/standoff_check.json]
+
+``--dx``: the pairs' cell size instead of CASES' (a pair is kept per Z and cell size).
 
 The JSON keeps the parts already there that this call does not run.
 """
@@ -39,8 +41,9 @@ CASES = {1: (2.15, 0.02, 2.2, 1.2, 0.45), 2: (4.3, 0.04, 4.4, 2.0, 0.82), 5: (10
 KB_CASES = {1: ((0.005, 0.0025), 0.3, 0.3), 2: ((0.01, 0.005), 0.5, 0.5), 5: ((0.02, 0.01), 1.0, 1.0)}
 
 
-def scenario(z: int, standoff: bool, kb_dx: float | None = None) -> dict:
+def scenario(z: int, standoff: bool, kb_dx: float | None = None, pair_dx: float | None = None) -> dict:
     D, dx, W, L, B = CASES[z]
+    dx = pair_dx or dx
     t_end = kb.value("arrival_time", MASS, D) + 1.2 * kb.value("positive_phase_duration", MASS, D)
     if kb_dx is not None:
         dx, W, L = kb_dx, KB_CASES[z][1], KB_CASES[z][2]
@@ -55,9 +58,9 @@ def scenario(z: int, standoff: bool, kb_dx: float | None = None) -> dict:
             "output": {"history_samples": 200, "fields": 0, "plots": False, "gauges": [[0.0, D - 0.5 * dx]]}}
 
 
-def one(z: int, standoff: bool, kb_dx: float | None = None) -> dict:
+def one(z: int, standoff: bool, kb_dx: float | None = None, pair_dx: float | None = None) -> dict:
     started = time.perf_counter()
-    res = blastfsi.run(scenario(z, standoff, kb_dx))
+    res = blastfsi.run(scenario(z, standoff, kb_dx, pair_dx))
     g = res.summary["gauges"][0]
     return {"wall_s": time.perf_counter() - started, "cells": res.summary["cells"], "steps": res.summary["steps"],
             "remap_time": res.summary["remap_time"], "peak_overpressure": g["peak_overpressure"],
@@ -68,6 +71,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", nargs="+", default=["pairs", "kb"], choices=["pairs", "kb"])
     ap.add_argument("--z", type=int, nargs="+", default=sorted(CASES), choices=sorted(CASES))
+    ap.add_argument("--dx", type=float, help="cell size of the pairs [m] (default: CASES, per Z)")
     ap.add_argument("--out", type=Path, default=Path(__file__).with_suffix(".json"))
     args = ap.parse_args(argv)
     saved = json.loads(args.out.read_text()) if args.out.exists() else {}
@@ -75,7 +79,8 @@ def main(argv=None) -> int:
            "cases": saved.get("cases", []), "kb_refinement": saved.get("kb_refinement", []), "commands": []}
     out["commands"] = saved.get("commands", []) + [" ".join([Path(sys.executable).name, *sys.argv])]
     if "pairs" in args.part:
-        out["cases"] = [c for c in out["cases"] if c["Z"] not in args.z] + pairs(args.z)
+        new = pairs(args.z, args.dx)
+        out["cases"] = [c for c in out["cases"] if (c["Z"], c["dx_m"]) not in {(n["Z"], n["dx_m"]) for n in new}] + new
     if "kb" in args.part:
         out["kb_refinement"] = [c for c in out["kb_refinement"] if c["Z"] not in args.z] + kb_refinement(args.z)
     args.out.write_text(json.dumps(out, indent=1) + "\n")
@@ -98,11 +103,11 @@ def kb_refinement(zs) -> list[dict]:
     return rows
 
 
-def pairs(zs) -> list[dict]:
+def pairs(zs, pair_dx: float | None = None) -> list[dict]:
     rows = []
     for z in zs:
-        D, dx = CASES[z][:2]
-        full, so = one(z, False), one(z, True)
+        D, dx = CASES[z][0], pair_dx or CASES[z][1]
+        full, so = one(z, False, pair_dx=pair_dx), one(z, True, pair_dx=pair_dx)
         ref = kb.value("reflected_overpressure", MASS, D)
         row = {"Z": z, "distance_m": D, "dx_m": dx, "full": full, "standoff": so, "kb_reflected_peak": ref,
                "kb_reflected_impulse": kb.value("reflected_impulse", MASS, D),
