@@ -722,7 +722,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
                                                                                            zero.dtype))
     batch = mpm.Particles(x=flat(x), v=flat(v), mass=flat(safe), volume0=flat(safe) / flat(rho), half_size=flat(half),
                           material=flat(material), active=flat(fed & ~has), point=point, q=zero, vol_rate=zero,
-                          wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(zero.shape, bool),
+                          wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(zero.shape + (3,), bool),
                           prescribed_velocity=jnp.zeros_like(flat(x)), surface_load=jnp.zeros_like(flat(x)))
     batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
     pool, required, slots = mpm.add_particles_at(P, batch, static.n_structure)
@@ -776,7 +776,7 @@ def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: St
     batch = mpm.Particles(x=x, v=vel.reshape(-1, 3), mass=jnp.where(m > 0.0, m, 1.0),
                           volume0=jnp.where(m > 0.0, m, 1.0) / rho.reshape(-1), half_size=half,
                           material=material.reshape(-1), active=present.reshape(-1), point=point, q=zero,
-                          vol_rate=zero, wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(n * G, bool),
+                          vol_rate=zero, wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros((n * G, 3), bool),
                           prescribed_velocity=jnp.zeros_like(half), surface_load=jnp.zeros_like(half))
     batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
     pool, required = mpm.add_particles(state.particles, batch, static.n_structure)

@@ -14,7 +14,8 @@ One step of length dt (all particle loops are whole-array operations):
    :func:`particle_to_grid`); body force m_I b on the grid (first term of Eq. 20).
 2. Nodal momentum update, Eq. (22)-(23); face conditions on the new nodal
    velocity (:mod:`blastfsi.mpm.grid`); nodes touched by particles with a
-   prescribed velocity move with it (a rigid impactor's constraint).
+   prescribed velocity move with it (a rigid impactor's constraint), component
+   by component (a sliding clamp prescribes only the normal one).
 3. G2P: particle velocity by the nodal velocity increment (Eq. 24, FLIP) and
    position by the UPDATED nodal velocity p^{n+1}/m (ERRATA 000-5, standard
    MUSL; the seed's Eq. 25 prints p^n). Prescribed particles move with their
@@ -286,12 +287,13 @@ def initialize(particles: Particles, params: Params, config: Config) -> State:
 
 
 def _constrain(v, p_fixed, m_fixed, grid: Grid, prescribed: bool):
-    """Face conditions on nodal velocities (num_nodes, dim), then the nodes touched
-    by prescribed particles take those particles' mass-weighted velocity."""
+    """Face conditions on nodal velocities (num_nodes, dim), then each component of the nodes touched
+    by particles prescribing it takes those particles' mass-weighted value (m_fixed, p_fixed: (num_nodes, dim),
+    per component the mass and momentum of the particles that prescribe it)."""
     v = apply_boundaries(v, grid)
     if prescribed:
         has = m_fixed > 0.0
-        v = jnp.where(has[:, None], p_fixed / jnp.where(has, m_fixed, 1.0)[:, None], v)
+        v = jnp.where(has, p_fixed / jnp.where(has, m_fixed, 1.0), v)
     return v
 
 
@@ -506,13 +508,14 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         forces.append(f)
     mw = m * w
     channels = [mw] + [mw * P.v[:, i] for i in range(d)] + forces
-    if config.prescribed:
-        mwp = jnp.where(P.prescribed, mw, 0.0)
-        channels += [mwp] + [mwp * P.prescribed_velocity[:, i] for i in range(d)]
+    if config.prescribed:  # per component, the mass and momentum of the particles prescribing it
+        mwp = [jnp.where(P.prescribed[:, i], mw, 0.0) for i in range(d)]
+        channels += mwp + [mwp[i] * P.prescribed_velocity[:, i] for i in range(d)]
     blend_at = len(channels)
     if config.blend:  # the alpha-weighted nodal mass and momentum of the blend heat (step 3)
         alpha = params.pic_fraction[jnp.clip(P.material, 0, len(config.models) - 1)]
-        alpha = jnp.where(act & ~P.prescribed, alpha, 0.0) if config.prescribed else jnp.where(act, alpha, 0.0)
+        free = act & ~jnp.any(P.prescribed, axis=1) if config.prescribed else act
+        alpha = jnp.where(free, alpha, 0.0)
         amw = alpha * mw
         channels += [amw] + [amw * P.v[:, i] for i in range(d)]
     nodal = particle_to_grid(idx, channels, n_nodes, combined)
@@ -522,7 +525,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if source is not None:  # Eqs. (37)-(39)
         m_I, p_I, f_I = m_I + source.mass, p_I + source.momentum, f_I + source.force
     f_I = f_I + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
-    m_fix, p_fix = (nodal[:, 1 + 2 * d], nodal[:, 2 + 2 * d:2 + 3 * d]) if config.prescribed else (None, None)
+    m_fix, p_fix = ((nodal[:, 1 + 2 * d:1 + 3 * d], nodal[:, 1 + 3 * d:1 + 4 * d]) if config.prescribed
+                    else (None, None))
     has = m_I > 0.0
     inv_m = jnp.where(has, 1.0 / jnp.where(has, m_I, 1.0), 0.0)[:, None]
     v_old = p_I * inv_m
@@ -551,8 +555,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         v_p, blend_heat = jnp.where(act[:, None], v_flip, P.v), 0.0
     x_p = jnp.where(act[:, None], P.x + dt * pic, P.x)
     if config.prescribed:
-        v_p = jnp.where(P.prescribed[:, None], P.prescribed_velocity, v_p)
-        x_p = jnp.where((P.prescribed & act)[:, None], P.x + dt * P.prescribed_velocity, x_p)
+        v_p = jnp.where(P.prescribed, P.prescribed_velocity, v_p)
+        x_p = jnp.where(P.prescribed & act[:, None], P.x + dt * P.prescribed_velocity, x_p)
     # Eq. (26): re-map of the updated particle momentum
     p2 = particle_to_grid(idx, [mw * v_p[:, i] for i in range(d)], n_nodes, combined)
     if source is not None:

@@ -38,7 +38,8 @@ class Particles(NamedTuple):
     vol_rate: jnp.ndarray  # (n,) volumetric strain rate D_kk of the last step [1/s]
     wave_speed: jnp.ndarray  # (n,) material signal speed c [m/s] (for the CFL step and q)
     plastic_work: jnp.ndarray  # (n,) accumulated plastic work [J/kg]
-    prescribed: jnp.ndarray  # (n,) bool: velocity prescribed (impactor)
+    prescribed: jnp.ndarray  # (n, 3) bool: which velocity components are prescribed (an impactor or a
+    #                          clamp: all; a sliding clamp: the normal one)
     prescribed_velocity: jnp.ndarray  # (n, 3) [m/s]
     surface_load: jnp.ndarray  # (n, 3) traction / boundary-layer thickness, t/h of 000 Eq. (20) [N/m^3]
 
@@ -78,7 +79,7 @@ def empty(capacity: int, history_size: int = 0, dtype=jnp.float64) -> Particles:
     return Particles(x=zeros(3), v=zeros(3), mass=zeros(), volume0=zeros(value=1.0), half_size=zeros(3),
                      material=jnp.asarray(np.zeros(n, np.int32)), active=jnp.asarray(np.zeros(n, bool)), point=point,
                      q=zeros(), vol_rate=zeros(), wave_speed=zeros(), plastic_work=zeros(),
-                     prescribed=jnp.asarray(np.zeros(n, bool)), prescribed_velocity=zeros(3), surface_load=zeros(3))
+                     prescribed=jnp.asarray(np.zeros((n, 3), bool)), prescribed_velocity=zeros(3), surface_load=zeros(3))
 
 
 def make_pool(batch: Particles, capacity: int) -> Particles:
@@ -102,15 +103,27 @@ def _pad3(a, n):
     return np.broadcast_to(np.pad(a, ((0, 0), (0, 3 - a.shape[1]))), (n, 3))
 
 
+def _held(prescribed, held, n) -> np.ndarray:
+    """(n, 3) bool mask of the prescribed velocity components of a batch."""
+    if prescribed is None:
+        if held is not None:
+            raise ParticleError("held: only a batch with a prescribed velocity holds components")
+        return np.zeros((n, 3), bool)
+    mask = np.ones(3, bool) if held is None else np.asarray(held, bool).reshape(3)
+    return np.broadcast_to(mask, (n, 3))
+
+
 def new_particles(x, volume, density, *, v=None, material=0, half_size=None, stress=None, energy=None,
-                  history=None, history_size: int = 0, prescribed=None, surface_load=None,
+                  history=None, history_size: int = 0, prescribed=None, held=None, surface_load=None,
                   dtype=jnp.float64) -> Particles:
     """A batch of active particles from host arrays (positions (n, d<=3) are padded to 3).
 
     ``volume`` (n,) and ``density`` (scalar or (n,)) give the mass; ``v`` (n, 3)
     the velocity (default: ``prescribed`` or zero); ``prescribed`` (n, 3) or
     None: the prescribed velocity of an impactor, all particles of the batch
-    move with it (build bodies as separate batches, join with :func:`concatenate`);
+    move with it (build bodies as separate batches, join with :func:`concatenate`); ``held`` (3,)
+    bool: the components of ``prescribed`` that are imposed (default all; a plate between clamping
+    plates that lets it slide: only its normal one), the others evolve freely;
     ``surface_load`` (n, 3): t/h of 000 Eq. (20), see :func:`surface_load`;
     ``stress`` (n, 6) Voigt.
     """
@@ -137,7 +150,7 @@ def new_particles(x, volume, density, *, v=None, material=0, half_size=None, str
         x=x, v=_pad3(prescribed if v is None else v, n), mass=volume * density, volume0=volume,
         half_size=_pad3(half_size, n), material=np.broadcast_to(np.asarray(material, np.int32), (n,)),
         active=np.ones(n, bool), point=point, q=zero, vol_rate=zero, wave_speed=zero, plastic_work=zero,
-        prescribed=np.full(n, prescribed is not None), prescribed_velocity=_pad3(prescribed, n),
+        prescribed=_held(prescribed, held, n), prescribed_velocity=_pad3(prescribed, n),
         surface_load=_pad3(surface_load, n))
     return jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype if np.issubdtype(a.dtype, np.floating) else None),
                                   batch)

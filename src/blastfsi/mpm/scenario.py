@@ -32,7 +32,7 @@ from pydantic import Field, field_validator, model_validator
 from blastfsi.materials import check_overrides
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import Coordinate, Demand, Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
+from blastfsi.scenario import AXES, Coordinate, Demand, Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
 
 Vector = Union[float, list[float]]
 FaceKind = Literal["free", "slip", "fixed"]
@@ -120,16 +120,23 @@ class Body(Strict):
 
 
 class Support(Strict):
-    """A clamp: the body's particles inside the box [lower, upper] are held at rest (zero prescribed
-    velocity, all components; the grid nodes they touch take it), as a bolted or welded edge is in a test
-    rig, the *BOUNDARY_SPC of a node set in LS-DYNA."""
+    """A clamp: the body's particles inside the box [lower, upper] are held at zero velocity (the grid
+    nodes they touch take it), in every component (a bolted or welded edge) or in those of ``hold`` only
+    (a plate pressed between clamping plates that lets it slide in its plane), as the *BOUNDARY_SPC of a
+    node set does in LS-DYNA."""
 
     lower: list[Coordinate] = Field(min_length=1, max_length=3, description="support box lower corner [m]")
     upper: list[Coordinate] = Field(min_length=1, max_length=3, description="support box upper corner [m]")
+    hold: Optional[list[Literal["x", "y", "z"]]] = Field(None, min_length=1, max_length=3, description=(
+        "the velocity components held at zero (default: all, a fully clamped edge); e.g. [\"y\"] for a plate "
+        "lying across y between two rigid clamping plates that hold its faces and let it pull in without "
+        "friction (r-z: x is r, y is z)"))
 
     @model_validator(mode="after")
     def _box(self):
         check_box(self.lower, self.upper, "support")
+        if self.hold is not None and len(set(self.hold)) != len(self.hold):
+            raise ValueError(f"hold: each axis once, got {self.hold}")
         return self
 
 
@@ -265,6 +272,9 @@ class MPMScenario(ScenarioBase):
             for j, sup in enumerate(b.supports):
                 if len(sup.lower) != nd:
                     raise ValueError(f"{key}.supports[{j}]: expected {nd} coordinate(s), got {len(sup.lower)}")
+                if sup.hold is not None and any(AXES.index(a) >= nd for a in sup.hold):
+                    raise ValueError(f"{key}.supports[{j}].hold: a {nd}D grid has the axes {list(AXES[:nd])}, "
+                                     f"got {sup.hold}")
             if b.shape == "cylinder":
                 if nd == 1:
                     raise ValueError(f"{key}.shape: a cylinder needs a 2D or 3D grid")

@@ -119,15 +119,17 @@ def _fill(grid: mpm.Grid, lower, upper, per_cell: int, key: str):
 
 
 def _clamped(body, x: np.ndarray, key: str, d: int) -> np.ndarray:
-    """Which of the body's particles lie in one of its support boxes; a support holding none is an error."""
-    held = np.zeros(len(x), bool)
+    """(n, 3) bool: the velocity components the body's support boxes hold, per particle (a particle in
+    several boxes is held in each one's components); a support holding no particle is an error."""
+    held = np.zeros((len(x), 3), bool)
     for j, sup in enumerate(body.supports):
         inside = np.all((x[:, :d] >= np.asarray(sup.lower)) & (x[:, :d] <= np.asarray(sup.upper)), axis=1)
         if not inside.any():
             raise ScenarioError(f"{key}.supports[{j}]: the box [{sup.lower}, {sup.upper}] m holds no particle of "
                                 f"the body; it must overlap the body by at least half a particle spacing")
-        held |= inside
-    if held.all():
+        axes = np.arange(3) < d if sup.hold is None else np.isin(np.arange(3), [AXES.index(a) for a in sup.hold])
+        held |= inside[:, None] & axes
+    if held[:, :d].all():
         raise ScenarioError(f"{key}.supports: the supports hold the whole body; clamp only part of it")
     return held
 
@@ -194,11 +196,12 @@ def build(sc: MPMScenario) -> Setup:
             traction[:d] = _vector(b.top_traction, d, f"{key}.top_traction", along_last=True)
             top = x[:, d - 1] > np.max(x[:, d - 1]) - 0.5 * s
             load = np.where(top[:, None], mpm.surface_load(traction, s), 0.0)
-        clamped = _clamped(b, x, key, d)
-        free = ~clamped
+        held = _clamped(b, x, key, d)
+        free = ~held.any(axis=1)
         parts = [(free, dict(v=v[free], prescribed=v[free] if b.prescribed else None))]
-        if clamped.any():  # held at rest: a zero prescribed velocity (a batch of its own)
-            parts.append((clamped, dict(v=None, prescribed=np.zeros((int(clamped.sum()), 3)))))
+        for mask in np.unique(held[~free], axis=0):  # clamped: zero prescribed velocity in the held components,
+            part = np.all(held == mask, axis=1)  # one batch per set of held components
+            parts.append((part, dict(v=None, prescribed=np.zeros((int(part.sum()), 3)), held=mask)))
         for part, motion in parts:
             batches.append(dict(x=x[part], volume=vol[part], density=rho, material=mat_index, half_size=half[part],
                                 stress=stress, energy=energy, surface_load=None if load is None else load[part],
