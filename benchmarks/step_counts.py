@@ -22,6 +22,7 @@ import blastfsi
 CASES = {  # name -> (example, overrides)
     "sedov-2d lax-wendroff": ("sedov-2d", {"numerics.scheme": "lax-wendroff"}),
     "sedov-2d hllc-muscl": ("sedov-2d", {"numerics.scheme": "hllc-muscl"}),
+    "sedov-2d hllc-hancock": ("sedov-2d", {"numerics.scheme": "hllc-hancock"}),
     "plate1d-uniform": ("plate1d-uniform", {}),
     "taylor-bar": ("taylor-bar", {}),
 }

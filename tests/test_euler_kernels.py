@@ -49,7 +49,7 @@ first_bad_cell = jax.jit(euler.first_bad_cell, static_argnums=2)
     (dict(dx=0.0), "Config.dx"),
     (dict(geometry=3), "Config.geometry"),
     (dict(geometry=2), "Config.geometry"),  # spherical needs 1 axis
-    (dict(scheme=2), "Config.scheme"),
+    (dict(scheme=3), "Config.scheme"),
     (dict(n=3), "Config.n_materials"),
     (dict(bc=((0, 0),)), "Config.bc"),
     (dict(bc=((0, 4), (0, 0))), "Config.bc[0]"),

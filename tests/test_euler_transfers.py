@@ -1,6 +1,6 @@
 """Face transfers of the Eulerian schemes (euler.step_with_transfers), for conservative coupling.
 
-Both schemes change every conserved row of a cell only through face terms (the radial momentum
+All schemes change every conserved row of a cell only through face terms (the radial momentum
 also through the pressure force p (A+ - A-)/V; the products fraction through alpha div u), so
 a step's face transfers T must balance the change of U cell by cell,
 
@@ -8,8 +8,8 @@ a step's face transfers T must balance the change of U cell by cell,
 
 and the content of any sub-box must change by the content through its faces, T dx (face area).
 
-Round-off bound used below: a cell value passes through at most 2 ndim operators (Lax-Wendroff)
-or 2 stages of ndim face differences (HLLC), a few roundings of size eps s each, with s the
+Round-off bound used below: a cell value passes through at most 2 ndim operators (Lax-Wendroff,
+HLLC-Hancock) or 2 stages of ndim face differences (HLLC-MUSCL), a few roundings of size eps s each, with s the
 largest magnitude of the row or its transfers; the discrepancy is then below ~50 eps s = 1e-14 s.
 The per-cell tolerance 1e-13 s leaves a factor 10; a missing or mis-weighted face term (a sweep,
 the viscous flux, an RK weight) would show at the size of the step's change, here >= 1e-2 s.
@@ -40,15 +40,16 @@ CASES = {  # shape, geometry, bc, materials: outflow, walls and a periodic axis,
     "spherical": ((12,), euler.SPHERICAL, ((A, O),), 2),
     "axisymmetric": ((10, 8), euler.CYLINDRICAL, ((A, O), (W, O)), 1),
 }
+SCHEMES = (euler.LAX_WENDROFF, euler.HLLC_MUSCL, euler.HLLC_HANCOCK)
 # compiles take 6-34 s each on the shared 2-core machine (step + recorded step): the default suite keeps the
-# 1D and 2D Cartesian cases of both schemes, the rest runs with -m slow
-SLOW = {(s, c) for s in (euler.LAX_WENDROFF, euler.HLLC_MUSCL) for c in ("3d", "spherical", "axisymmetric")}
+# 1D and 2D Cartesian cases of every scheme, the rest runs with -m slow
+SLOW = {(s, c) for s in SCHEMES for c in ("3d", "spherical", "axisymmetric")}
 
 
 def runs(keep=lambda case: True):
-    """pytest parameters (scheme, case) of both schemes, the cases kept by keep(case)."""
+    """pytest parameters (scheme, case) of every scheme, the cases kept by keep(case)."""
     return [pytest.param(scheme, case, marks=[pytest.mark.slow] if (scheme, case) in SLOW else [])
-            for scheme in (euler.LAX_WENDROFF, euler.HLLC_MUSCL) for case in CASES if keep(case)]
+            for scheme in SCHEMES for case in CASES if keep(case)]
 
 
 step = jax.jit(euler.step, static_argnums=3)
@@ -157,7 +158,7 @@ def test_no_transfer_through_mirror_faces(scheme, case):
     """At a wall, symmetry plane or axis the mirror ghost state makes the face velocity 0: no mass
     (nor energy, tangential momentum, products fraction) crosses; only the normal momentum
     (pressure impulse) does. Lax-Wendroff: exactly 0 (the corrector flux is a product with the
-    face velocity, which cancels exactly). HLLC: its flux w_L q v_L + w_R q v_R with v_R = -v_L
+    face velocity, which cancels exactly). HLLC (both schemes): its flux w_L q v_L + w_R q v_R with v_R = -v_L
     cancels exactly in IEEE arithmetic, but XLA:CPU may contract it into a fused multiply-add,
     which leaves the rounding error of one product: below eps of the row's scale (exactly 0
     with FMA disabled, XLA_FLAGS=--xla_cpu_max_isa=SSE4_2)."""
@@ -199,15 +200,18 @@ def test_recording_leaves_the_step_unchanged(scheme, case):
         assert np.max(np.abs(U_new[r] - U_step[r])) <= 8 * np.finfo(float).eps * np.max(np.abs(U_step[r]))
 
 
-@pytest.mark.parametrize("scheme", [euler.LAX_WENDROFF, euler.HLLC_MUSCL])
-@pytest.mark.parametrize("case", ["2d", "axisymmetric"])
+@pytest.mark.parametrize("scheme, case", [(s, c) for s in (euler.LAX_WENDROFF, euler.HLLC_MUSCL)
+                                           for c in ("2d", "axisymmetric")]
+                         + [(euler.HLLC_HANCOCK, "2d"), pytest.param(euler.HLLC_HANCOCK, "axisymmetric",
+                                                                     marks=pytest.mark.slow)])
 def test_blocked_sweeps_equal_the_whole_grid(scheme, case, monkeypatch):
-    """Both schemes sweep grids of more than blocking.BLOCKED_ABOVE cells block by block (a loop over
-    slabs along another axis, updated in place: Lax-Wendroff's directional operators, HLLC-MUSCL's flux
-    divergence of each axis). The blocks must give the whole-grid step and transfers: the
-    same per-cell arithmetic, so equal up to how XLA contracts multiply-adds (a few ulp of each row's scale,
-    as in test_recording_leaves_the_step_unchanged). The shipped threshold leaves every test grid whole, so
-    the blocks are forced here: several planes per block on one axis, one plane on the other."""
+    """All schemes sweep grids of more than blocking.BLOCKED_ABOVE cells block by block (a loop over
+    slabs along another axis, updated in place: the directional operators of Lax-Wendroff and
+    HLLC-Hancock, HLLC-MUSCL's flux divergence of each axis). The blocks must give the whole-grid step
+    and transfers: the same per-cell arithmetic, so equal up to how XLA contracts multiply-adds (a few
+    ulp of each row's scale, as in test_recording_leaves_the_step_unchanged). The shipped threshold
+    leaves every test grid whole, so the blocks are forced here: several planes per block on one axis,
+    one plane on the other. (HLLC-Hancock's r-z case runs with -m slow, for its compile time.)"""
     from blastfsi.euler import blocking
 
     shape, geom, bc, n = CASES[case]
@@ -231,7 +235,8 @@ def test_blocked_sweeps_equal_the_whole_grid(scheme, case, monkeypatch):
     assert not np.array_equal(whole[0], U)  # the step did change the state
 
 
-@pytest.mark.parametrize("scheme", [pytest.param(euler.LAX_WENDROFF, marks=pytest.mark.slow), euler.HLLC_MUSCL])
+@pytest.mark.parametrize("scheme", [pytest.param(euler.LAX_WENDROFF, marks=pytest.mark.slow), euler.HLLC_MUSCL,
+                                    pytest.param(euler.HLLC_HANCOCK, marks=pytest.mark.slow)])
 def test_accelerator_control_flow_gives_the_same_step(scheme, monkeypatch):
     """Where a conditional or a loop iteration costs a host round trip (a GPU), the kernels select
     between computed branches and unroll the operator and stage loops (blastfsi.xla); forced here on

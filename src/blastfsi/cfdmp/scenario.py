@@ -54,9 +54,10 @@ class CfdmpNumerics(MPMNumerics):
     """The MPM solver's numerics (bulk viscosity, pressure relaxation) with the coupled run's defaults, and
     the Eulerian scheme's."""
 
-    scheme: Literal["lax-wendroff", "hllc-muscl"] = Field("hllc-muscl", description="Eulerian scheme")
+    scheme: Literal["lax-wendroff", "hllc-muscl", "hllc-hancock"] = Field("hllc-muscl", description=(
+        "Eulerian scheme (see the euler method's numerics.scheme)"))
     limiter: Limiter = Field("van-leer", description=(
-        "slope limiter of the Eulerian hllc-muscl scheme (see the euler method's numerics.limiter)"))
+        "slope limiter of the Eulerian hllc-muscl and hllc-hancock schemes (see the euler method's numerics.limiter)"))
     cfl: float = Field(0.4, gt=0.0, le=1.0, description=(
         "Courant number of the MPM step, and of the Eulerian one unless euler_cfl is set (one common step: the "
         "smaller of the two)"))
@@ -132,7 +133,7 @@ class CfdmpScenario(ScenarioBase):
 
     def demands(self) -> list[Demand]:
         """The grid, and the particle pool: numerics.capacity, or the default pool's pool_headroom x the box's
-        gas particles plus the structures' (blastfsi.problems.cfdmp)."""
+        gas particles plus the structures' (blastfsi.cfdmp.problem)."""
         box, nd = self.mpm_region, self.domain.ndim
         dx = (self.domain.upper[0] - self.domain.lower[0]) / self.grid.cells
         gas = lattice_count([hi - lo for lo, hi in zip(box.lower, box.upper)], dx, box.gas_particles_per_cell)

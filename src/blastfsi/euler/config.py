@@ -19,8 +19,8 @@ import jax
 
 CARTESIAN, CYLINDRICAL, SPHERICAL = 0, 1, 2
 OUTFLOW, WALL, AXIS, PERIODIC = 0, 1, 2, 3
-LAX_WENDROFF, HLLC_MUSCL = 0, 1
-VAN_LEER, MINMOD, MC = 0, 1, 2  # slope limiters of HLLC-MUSCL (hllc.limited_slope)
+LAX_WENDROFF, HLLC_MUSCL, HLLC_HANCOCK = 0, 1, 2
+VAN_LEER, MINMOD, MC = 0, 1, 2  # slope limiters of the HLLC schemes (hllc.limited_slope)
 
 MIN_CELLS = 2  # ghost depth of both schemes (mirror boundaries copy this many cells)
 
@@ -32,10 +32,10 @@ class Config(NamedTuple):
     0 Cartesian, 1 cylindrical (1D radial, or 2D axisymmetric r-z), 2 spherical
     (1D radial) -- the radius is axis 0; bc: one (lo, hi) pair of boundary kinds
     per axis (0 outflow, 1 wall/symmetry plane, 2 axis r = 0, 3 periodic);
-    scheme: 0 Lax-Wendroff (000 Sec. 2.1), 1 HLLC-MUSCL; n_materials: 1, or 2
-    for [products, air]; origin: lower corner of the grid [m]; limiter: the
-    slope limiter of HLLC-MUSCL, 0 van Leer, 1 minmod, 2 monotonized central
-    (unused by Lax-Wendroff).
+    scheme: 0 Lax-Wendroff (000 Sec. 2.1), 1 HLLC-MUSCL (unsplit), 2 HLLC-Hancock
+    (split MUSCL-Hancock); n_materials: 1, or 2 for [products, air]; origin:
+    lower corner of the grid [m]; limiter: the slope limiter of the two HLLC
+    schemes, 0 van Leer, 1 minmod, 2 monotonized central (unused by Lax-Wendroff).
     """
 
     shape: tuple
@@ -139,8 +139,9 @@ def check_config(cfg: Config) -> None:
         raise ValueError(f"Config.bc[0][0] at r = 0 must be 1 (wall) or 2 (axis), got {cfg.bc[0][0]}")
     if cfg.geometry != CARTESIAN and cfg.bc[0][0] == PERIODIC:
         raise ValueError("Config.bc[0] cannot be periodic along the radius")
-    if cfg.scheme not in (LAX_WENDROFF, HLLC_MUSCL):
-        raise ValueError(f"Config.scheme must be 0 (lax-wendroff) or 1 (hllc-muscl), got {cfg.scheme}")
+    if cfg.scheme not in (LAX_WENDROFF, HLLC_MUSCL, HLLC_HANCOCK):
+        raise ValueError(f"Config.scheme must be 0 (lax-wendroff), 1 (hllc-muscl) or 2 (hllc-hancock), "
+                         f"got {cfg.scheme}")
     if cfg.limiter not in (VAN_LEER, MINMOD, MC):
         raise ValueError(f"Config.limiter must be 0 (van Leer), 1 (minmod) or 2 (MC), got {cfg.limiter}")
     if cfg.n_materials not in (1, 2):

@@ -101,7 +101,7 @@ def hllc_flux(left: FaceState, right: FaceState, lay, axis):
     return flux, wv_l + wv_r
 
 
-def _split(w, lay):
+def split_primitive(w, lay):
     """(phase densities, products fraction, velocity, pressure) of primitive rows."""
     nm, nd = lay.n, lay.ndim
     return tuple(w[:nm]), (w[nm + nd + 1] if nm == 2 else None), tuple(w[nm:nm + nd]), w[nm + nd]
@@ -109,7 +109,7 @@ def _split(w, lay):
 
 def _face_state(w, rho_e, c2, lay, axis):
     """FaceState of primitive rows w with its rho e and c^2."""
-    rho_k, alpha, vel, p = _split(w, lay)
+    rho_k, alpha, vel, p = split_primitive(w, lay)
     partials = tuple(r * a for r, a in zip(rho_k, (1.0,) if lay.n == 1 else (alpha, 1.0 - alpha)))
     rho = partials[0] if lay.n == 1 else partials[0] + partials[1]
     return FaceState(assemble_rows(partials, rho, vel, rho_e, alpha, lay), rho, vel[axis], p, c2)
@@ -117,7 +117,7 @@ def _face_state(w, rho_e, c2, lay, axis):
 
 def _reconstructed(w, eos_r, lay):
     """(rho e, c^2, physical?) of a reconstructed primitive state."""
-    rho_k, alpha, _, p = _split(w, lay)
+    rho_k, alpha, _, p = split_primitive(w, lay)
     partials, rho, rho_e, c2 = closure_from_pressure(rho_k, alpha, p, eos_r, lay.n)
     ok = (rho > 0.0) & (p > 0.0) & (c2 > 0.0)
     for q in partials:
@@ -125,23 +125,24 @@ def _reconstructed(w, eos_r, lay):
     return rho_e, c2, ok
 
 
-def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
-    """HLLC flux rows and face velocity at the faces 0..n of one axis (face f between cells f-1, f).
-
-    z: rows [primitive rows (nw), rho e, c^2] with NG ghost cells on that axis (n + 2 NG cells;
-    n is cfg.shape[axis] or the extent of a block along it).
-    """
+def cell_slopes(z, nw, cfg: Config, axis):
+    """Limited slopes (:func:`limited_slope`, cfg.limiter) of the primitive rows z[:nw] of cells -1..n,
+    z with NG ghost cells on that axis."""
     n = z[0].shape[axis] - 2 * NG
     tiny = jnp.finfo(z[0].dtype).tiny
-    z1, z2 = (tuple(shift(x, axis, s, n + 1) for x in z) for s in (1, 2))  # cells f-1, f
-    w_left, w_right = [], []
-    for x, b, c in zip(z[:nw], z1[:nw], z2[:nw]):
-        # the limited slope of each cell -1..n once (it enters the left state of its upper face
-        # and the right state of its lower face)
+    slopes = []
+    for x in z[:nw]:
         jump = jnp.diff(x, axis=axis)  # between cells -2..n+1
-        slope = limited_slope(shift(jump, axis, 0, n + 2), shift(jump, axis, 1, n + 2), tiny, cfg.limiter)
-        w_left.append(b + 0.5 * shift(slope, axis, 0, n + 1))
-        w_right.append(c - 0.5 * shift(slope, axis, 1, n + 1))
+        slopes.append(limited_slope(shift(jump, axis, 0, n + 2), shift(jump, axis, 1, n + 2), tiny, cfg.limiter))
+    return slopes
+
+
+def face_flux(w_left, w_right, z, nw, eos_r, lay, axis):
+    """HLLC flux rows and face velocity at the faces 0..n of one axis from the primitive face states
+    w_left (of cell f-1) and w_right (of cell f); a face where either state is non-physical takes the
+    two cell-centre states of z (rows [primitive rows (nw), rho e, c^2] with NG ghost cells) instead."""
+    n = z[0].shape[axis] - 2 * NG
+    z1, z2 = (tuple(shift(x, axis, s, n + 1) for x in z) for s in (1, 2))  # cells f-1, f
     e_left, c2_left, ok_left = _reconstructed(w_left, eos_r, lay)
     e_right, c2_right, ok_right = _reconstructed(w_right, eos_r, lay)
     ok = ok_left & ok_right
@@ -153,6 +154,49 @@ def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
     right = _face_state(tuple(map(pick, w_right, z2[:nw])), pick(e_right, z2[nw]), pick(c2_right, z2[nw + 1]), lay,
                         axis)
     return hllc_flux(left, right, lay, axis)
+
+
+def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
+    """HLLC flux rows and face velocity at the faces 0..n of one axis (face f between cells f-1, f).
+
+    z: rows [primitive rows (nw), rho e, c^2] with NG ghost cells on that axis (n + 2 NG cells;
+    n is cfg.shape[axis] or the extent of a block along it).
+    """
+    n = z[0].shape[axis] - 2 * NG
+    # the limited slope of each cell -1..n once (it enters the left state of its upper face
+    # and the right state of its lower face)
+    slopes = cell_slopes(z, nw, cfg, axis)
+    w_left = [shift(x, axis, 1, n + 1) + 0.5 * shift(s, axis, 0, n + 1) for x, s in zip(z[:nw], slopes)]
+    w_right = [shift(x, axis, 2, n + 1) - 0.5 * shift(s, axis, 1, n + 1) for x, s in zip(z[:nw], slopes)]
+    return face_flux(w_left, w_right, z, nw, eos_r, lay, axis)
+
+
+def padded(cells, cfg: Config, lay, axis):
+    """Cell rows with NG ghost cells on ``axis`` (boundaries.pad; the normal velocity changes sign in a mirror)."""
+    return tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == lay.n + axis else None) for r, x in enumerate(cells))
+
+
+def flux_divergence(flux, u_face, p, alpha, cfg: Config, lay, axis):
+    """Per conservative row, g+ F_{i+1/2} - g- F_{i-1/2} of cells 0..n-1 along ``axis`` from the flux rows
+    and face velocity at faces 0..n (g+- = 1 off the radial axis, geometry.flux_factors on it): on the
+    radial axis the radial momentum's row holds F - p (with p (g+ - g-) the pressure force p (A+ - A-)/V)
+    and the products fraction's row subtracts alpha (g+ u_{i+1/2} - g- u_{i-1/2}), its alpha div u term.
+    p, alpha: the cells' pressure and products fraction (alpha None with one material)."""
+    n = cfg.shape[axis]
+    radial = axis == 0 and cfg.geometry != CARTESIAN
+    if radial:
+        gp, gm = geometry.flux_factors(cfg, 0, n, p.dtype)
+    out = []
+    for r in range(lay.nvar):
+        f_hi, f_lo = shift(flux[r], axis, 1, n), shift(flux[r], axis, 0, n)
+        if radial and r == lay.mom + axis:
+            f_hi, f_lo = f_hi - p, f_lo - p  # pressure force p (A+ - A-)/V on the radial momentum
+        div = gp * f_hi - gm * f_lo if radial else f_hi - f_lo
+        if r == lay.alpha:
+            u_hi, u_lo = shift(u_face, axis, 1, n), shift(u_face, axis, 0, n)
+            div = div - alpha * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
+        out.append(div)
+    return out
 
 
 def primitive_rows(rows, eos_r, lay):
@@ -189,24 +233,10 @@ def rhs(rows, eos_r, cfg: Config, lay, record: bool = False):
 def _sweep(ins, outs, nw, eos_r, cfg: Config, lay, axis, record):
     """One axis's flux divergence added to L (outs[:nvar]; record: the flux rows in outs[nvar:]) of a block
     spanning the axis: ins = primitive rows [, products fraction row]."""
-    nm, n = lay.n, cfg.shape[axis]
-    cells, p = ins[:nw + 2], ins[nm + lay.ndim]
-    padded = tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == nm + axis else None) for r, x in enumerate(cells))
-    flux, u_face = materialise(lambda z: axis_flux(z, nw, eos_r, cfg, lay, axis), padded)
-    radial = axis == 0 and cfg.geometry != CARTESIAN
-    if radial:
-        gp, gm = geometry.flux_factors(cfg, 0, n, p.dtype)
-    new = []
-    for r in range(lay.nvar):
-        f_hi, f_lo = shift(flux[r], axis, 1, n), shift(flux[r], axis, 0, n)
-        if radial and r == lay.mom + axis:
-            f_hi, f_lo = f_hi - p, f_lo - p  # pressure force p (A+ - A-)/V on the radial momentum
-        div = gp * f_hi - gm * f_lo if radial else f_hi - f_lo
-        if r == lay.alpha:
-            u_hi, u_lo = shift(u_face, axis, 1, n), shift(u_face, axis, 0, n)
-            div = div - ins[-1] * (gp * u_hi - gm * u_lo if radial else u_hi - u_lo)
-        new.append(outs[r] - div / cfg.dx)
-    return tuple(new) + (tuple(flux) if record else ())
+    flux, u_face = materialise(lambda z: axis_flux(z, nw, eos_r, cfg, lay, axis), padded(ins[:nw + 2], cfg, lay, axis))
+    divs = flux_divergence(flux, u_face, ins[lay.n + lay.ndim], ins[nw + 2] if lay.n == 2 else None, cfg, lay, axis)
+    new = tuple(o - div / cfg.dx for o, div in zip(outs[:lay.nvar], divs))
+    return new + (tuple(flux) if record else ())
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):

@@ -1,5 +1,5 @@
 """The ``euler`` method behind the driver's face (:class:`blastfsi.method.Method`):
-initial data from :mod:`blastfsi.problems.euler`, the kernels of
+initial data from :mod:`blastfsi.euler.problem`, the kernels of
 :mod:`blastfsi.euler`, blast maps and gauges of :mod:`blastfsi.diagnostics.blast_maps`."""
 from __future__ import annotations
 
@@ -10,13 +10,18 @@ import numpy as np
 
 from blastfsi import euler as kernels
 from blastfsi import timeloop
+from blastfsi.detonation import kb_compare
+from blastfsi.detonation.kb_compare import scenario_references
 from blastfsi.diagnostics import blast_maps
 from blastfsi.euler.scenario import EulerScenario
 from blastfsi.scenario import AXES
 from blastfsi.method import Grid, register
-from blastfsi.problems import euler as problem
+from blastfsi.euler import problem
 
-SCHEME_CODE = {"lax-wendroff": kernels.LAX_WENDROFF, "hllc-muscl": kernels.HLLC_MUSCL}
+# blastfsi.plotting (matplotlib) is imported inside the plotting functions only: it loads when plots are drawn.
+
+SCHEME_CODE = {"lax-wendroff": kernels.LAX_WENDROFF, "hllc-muscl": kernels.HLLC_MUSCL,
+               "hllc-hancock": kernels.HLLC_HANCOCK}
 LIMITER_CODE = {"van-leer": kernels.VAN_LEER, "minmod": kernels.MINMOD, "mc": kernels.MC}
 GEOMETRY_CODE = {"cartesian": kernels.CARTESIAN, "cylindrical": kernels.CYLINDRICAL,
                  "spherical": kernels.SPHERICAL, "axisymmetric": kernels.CYLINDRICAL}
@@ -174,7 +179,7 @@ class Euler:
         t = float(state.t)
         out = {"scheme": sc.numerics.scheme, "geometry": setup.grid.geometry, "materials": list(setup.materials),
                "dx": setup.grid.dx}
-        if sc.numerics.scheme == "hllc-muscl":
+        if sc.numerics.scheme != "lax-wendroff":  # the HLLC schemes' limiter
             out["limiter"] = sc.numerics.limiter
         for q in ("mass", "energy"):
             first, last = hist[q][0], hist[q][-1]
@@ -191,8 +196,6 @@ class Euler:
                 "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None,
             })
         if "charge_mass" in setup.info and gauges:
-            from blastfsi.detonation import kb_compare
-
             info = setup.info
             if info["kb_burst"] is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
                 r = kb_compare.distances(setup.gauges, info["charge_center"])
@@ -213,7 +216,6 @@ class Euler:
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
             if sc.initial.kind == "charge" and setups[0].info["kb_burst"] is not None:
-                from blastfsi.detonation.kb_compare import scenario_references
                 from blastfsi.plotting.kb import kb_gauge_histories
 
                 info = setups[0].info

@@ -1,0 +1,150 @@
+"""Scheme 2: dimensionally split MUSCL-Hancock with HLLC fluxes (Toro, Riemann Solvers and Numerical
+Methods for Fluid Dynamics, 3rd ed., 2009, Sec. 14.4 in primitive variables; splitting Ch. 16).
+
+One directional operator L_a(tau) (:func:`sweep`), per cell i along axis a:
+
+1. Reconstruction as in hllc.py: the primitive rows w = (rho_k, u, p, alpha) -- phase densities,
+   velocity, pressure, products fraction -- and their limited slopes Delta_i (hllc.cell_slopes), on
+   the ghost cells of hllc.padded.
+2. Evolution (Hancock predictor, Toro 2009 Sec. 14.4): both boundary-extrapolated values
+   w_i -+ Delta_i/2 advance by tau/2 with the quasi-linear primitive system of the axis, frozen at the
+   cell-centre state,
+
+       w^L_i = w_i - Delta_i/2 + delta_i,   w^R_i = w_i + Delta_i/2 + delta_i,
+       delta_i = -tau/(2 dx) A(w_i) Delta_i - tau/2 S(w_i),
+
+   A Delta row by row: rho_k: u Delta rho_k + rho_k Delta u;  u (normal): u Delta u + Delta p / rho;
+   transverse velocity: u Delta u_t;  p: u Delta p + rho c^2 Delta u;  alpha: u Delta alpha
+   (rho the mixture density, c^2 the five-equation mixture's, mixture.py; alpha is advected, as
+   the alpha div u term of the conservative form makes it). On the radial axis of a cylindrical
+   (j = 1) or spherical (j = 2) grid S is the source of the quasi-one-dimensional equations,
+   S = j u / r (rho_k, 0, 0, rho c^2, 0) at the cell centre r; a mirror ghost cell takes the negated
+   j / r of its image (its u is negated too), an outflow ghost its edge cell's, so that the predicted
+   state of a ghost cell is the boundary image of its cell's.
+3. HLLC flux (hllc.face_flux: the Einfeldt speeds, the products fraction's face velocity) at face
+   i+1/2 from (w^R_i, w^L_{i+1}); a face where either predicted state is non-physical (rho, p,
+   c^2 <= 0, a negative partial density, NaN) takes the two cell-centre states instead.
+4. Conservative update of this axis, U_i <- U_i - tau/dx (g+_i F_{i+1/2} - g-_i F_{i-1/2}) with the
+   radial pressure force and the products fraction's alpha div u term of hllc.flux_divergence, both
+   at the cell's mid-step state w_i + delta_i (time-centred: second order in radial geometry).
+
+Full step (Strang, Toro 2009 Ch. 16), as Lax-Wendroff's: U^{n+1} = L_z L_y L_x L_x L_y L_z U^n, each
+operator with dt/2 (applied right to left; in 1D two x operators of dt/2), with the time step of
+Lax-Wendroff, dt = cfl dx / max_d max_cells (|u_d| + c): each operator runs at Courant number <= cfl/2.
+One flux evaluation per operator: 2 ndim per step, as hllc-muscl's two stages of ndim axes, on a step
+ndim times longer.
+
+Face transfers (for conservative coupling): the amount of a row moved across face i+1/2 from cell i
+to cell i+1 by one operator is T = tau/dx F_{i+1/2}; the radial momentum's pressure force and the
+products fraction's alpha div u term are cell sources (T of the products fraction is the HLLC flux of
+alpha).
+"""
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from blastfsi.euler import hllc
+from blastfsi.euler.blocking import blocked
+from blastfsi.euler.boundaries import pad, shift
+from blastfsi.euler.config import CARTESIAN, Config
+from blastfsi.euler.hllc import NG
+from blastfsi.euler.mixture import volume_fractions
+from blastfsi.xla import fori, materialise
+
+
+def radial_source_factor(cfg: Config, dtype):
+    """j dx / r at the centres of the cells -1..n of the radial axis (a mirror ghost cell: the negated
+    factor of its image, an outflow one: its edge cell's), shaped to broadcast along axis 0."""
+    r = cfg.origin[0] + cfg.dx * (np.arange(cfg.shape[0]) + 0.5)
+    factor = np.asarray(cfg.geometry * cfg.dx / r, dtype).reshape((-1,) + (1,) * (len(cfg.shape) - 1))
+    return pad(jnp.asarray(factor), 0, cfg.bc[0], 1, -1.0)
+
+
+def predictor(w, slope, c2, lam, geo, lay, axis):
+    """delta of the primitive rows (module docstring, step 2): -lam A(w) slope - lam geo S'(w), lam = tau/(2 dx),
+    geo = j dx / r on the radial axis (cells -1..n; None elsewhere), S' = u (rho_k, 0, 0, rho c^2, 0)."""
+    rho_k, alpha, vel, _ = hllc.split_primitive(w, lay)
+    s_rho_k, s_alpha, s_vel, s_p = hllc.split_primitive(slope, lay)
+    u = vel[axis]
+    rho = sum(a * r for a, r in zip(volume_fractions(alpha, lay.n), rho_k))
+    div = s_vel[axis] if geo is None else s_vel[axis] + geo * u  # dx (du/dx + j u / r), quasi-1D divergence
+    # s_p (1/rho), not s_p / rho: XLA rewrites (a / b) / rho as a / (b rho), and the limiter's floor b = tiny
+    # of two zero differences (a = 0) times rho < 1 underflows to 0: 0/0
+    force = s_p * (1.0 / rho)
+    return (tuple(-lam * (u * s + r * div) for r, s in zip(rho_k, s_rho_k))
+            + tuple(-lam * (u * s + (force if k == axis else 0.0)) for k, s in enumerate(s_vel))
+            + (-lam * (u * s_p + rho * c2 * div),) + ((-lam * u * s_alpha,) if lay.n == 2 else ()))
+
+
+def hancock_flux(z, nw, lam, geo, eos_r, cfg: Config, lay, axis):
+    """(flux rows and face velocity at the faces 0..n, mid-step pressure and products fraction of cells
+    0..n-1 (None with one material)) of one axis; z: rows [primitive rows (nw), rho e, c^2] with NG
+    ghost cells on that axis."""
+    n = z[0].shape[axis] - 2 * NG
+    slopes = hllc.cell_slopes(z, nw, cfg, axis)  # cells -1..n
+    cells = tuple(shift(x, axis, 1, n + 2) for x in z)
+    delta = predictor(cells[:nw], slopes, cells[nw + 1], lam, geo, lay, axis)
+    w_left = [shift(x + 0.5 * s + d, axis, 0, n + 1) for x, s, d in zip(cells, slopes, delta)]  # w^R of cell f-1
+    w_right = [shift(x - 0.5 * s + d, axis, 1, n + 1) for x, s, d in zip(cells, slopes, delta)]  # w^L of cell f
+    flux, u_face = hllc.face_flux(w_left, w_right, z, nw, eos_r, lay, axis)
+
+    def mid_step(r):  # primitive row r of cells 0..n-1 at the mid-step state w + delta
+        return shift(cells[r] + delta[r], axis, 1, n)
+    return flux, u_face, mid_step(lay.n + lay.ndim), mid_step(nw - 1) if lay.n == 2 else None
+
+
+def sweep(rows, tau, eos_r, cfg: Config, lay, axis: int, record: bool = False):
+    """One directional operator L_axis(tau) on a tuple of conservative rows (module docstring); record
+    (static): also return the face transfers T = tau/dx F (rows at faces 0..n of the axis)."""
+    cells = hllc.primitive_rows(rows, eos_r, lay)
+    nw = len(cells) - 2
+    lam = tau / cfg.dx
+    radial = axis == 0 and cfg.geometry != CARTESIAN
+    geo = radial_source_factor(cfg, rows[0].dtype) if radial else None
+    flux, u_face, p, alpha = materialise(lambda z: hancock_flux(z, nw, 0.5 * lam, geo, eos_r, cfg, lay, axis),
+                                         hllc.padded(cells, cfg, lay, axis))
+    divs = hllc.flux_divergence(flux, u_face, p, alpha, cfg, lay, axis)
+    new = tuple(x - lam * div for x, div in zip(rows, divs))
+    return (new, tuple(lam * f for f in flux)) if record else new
+
+
+def step(U, dt, eos_r, cfg: Config, lay, moved=None):
+    """L_z L_y L_x L_x L_y L_z, each operator with dt/2 (module docstring), the order of lax_wendroff.step.
+
+    The operators run in a fori_loop that switches between the ndim directional bodies (each compiled
+    once on the CPU; unrolled where loops cost a host round trip, :func:`blastfsi.xla.fori`); each sweeps
+    a large grid block by block (blocking.blocked). moved: None, or per axis a tuple of face-transfer
+    rows (faces 0..n of that axis) onto which the transfers of the operators along that axis are summed;
+    then (U_new, moved) is returned. Static: the plain step carries no transfers.
+    """
+    ndim = len(cfg.shape)
+    order = tuple(reversed(range(ndim))) + tuple(range(ndim))
+    rows = tuple(U)
+    nvar = len(rows)
+    tau = 0.5 * dt
+
+    def body(a):  # the operator along axis a on the loop state
+        if moved is None:
+            return lambda rows: blocked(lambda _, r: sweep(r, tau, eos_r, cfg, lay, a), (), rows, cfg, a)
+
+        def sweep_and_add(_, outs):  # outs: the rows, then the transfers of axis a so far
+            new, t = sweep(outs[:nvar], tau, eos_r, cfg, lay, a, record=True)
+            return new + tuple(m + x for m, x in zip(outs[nvar:], t))
+
+        def recording(state):  # the transfers of all axes are carried, those of axis a added to
+            rows, acc = state
+            out = blocked(sweep_and_add, (), rows + acc[a], cfg, a)
+            return out[:nvar], acc[:a] + (out[nvar:],) + acc[a + 1:]
+        return recording
+
+    branches = [body(a) for a in range(ndim)]
+
+    def operator(i, state):  # i traced in a loop, a Python int where the loop is unrolled (fori)
+        if isinstance(i, int):
+            return branches[order[i]](state)
+        return jax.lax.switch(jnp.asarray(order)[i], branches, state)
+
+    state = fori(2 * ndim, operator, rows if moved is None else (rows, tuple(moved)))
+    return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])
