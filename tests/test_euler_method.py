@@ -147,6 +147,8 @@ BAD = [
     ("boundaries.x", {"boundaries": {"x": ["outflow", "sticky"]}}),
     ("boundaries.y", {"boundaries": {"y": ["periodic", "outflow"]}}),
     ("numerics.scheme", {"numerics": {"scheme": "weno"}}),
+    ("numerics: cfl: hllc-muscl (unsplit) is stable for 0 < cfl <= 1", {"numerics": {"cfl": 1.2}}),
+    ("numerics.cfl", {"numerics": {"scheme": "hllc-hancock", "cfl": 1.6}}),
     ("domain", {"domain": {"lower": [-1.0, -1.0], "upper": [1.0, 1.05]}}),
     ("grid.cells", {"grid.cells": 20.5}),
     ("boundaries.x", {"domain.geometry": "axisymmetric", "domain.lower": [0.0, -1.0]}),
@@ -159,7 +161,7 @@ BAD = [
 def test_malformed_multid_scenarios_are_rejected_naming_the_key(key, over):
     with pytest.raises(ScenarioError) as err:
         sc = parse(_sedov2d(**over))
-        from blastfsi.problems.euler import build
+        from blastfsi.euler.problem import build
 
         build(sc)
     assert key in str(err.value), str(err.value)
