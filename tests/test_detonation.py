@@ -7,7 +7,7 @@ import pytest
 
 import blastfsi
 from blastfsi.lagrangian1d import scheme
-from blastfsi.problems.detonation import charge_radius, graded_nodes
+from blastfsi.lagrangian1d.charge_problem import charge_radius, graded_nodes
 from blastfsi.scenario import ScenarioError, parse
 
 RHO_TNT = 1630.0  # seed 000 Sec. 4.1

@@ -30,7 +30,7 @@ def wall_run(ratio, cells=400, length=2.0, **over):
     data = uniform_data(incident__overpressure=ratio * P0, plate__beta_s=None, plate__fixed=True,
                         grid__cells=cells, domain__length=length, output__fields=0, **over)
     sc = simulation.parse(data)
-    from blastfsi.problems.plate1d import clean_window
+    from blastfsi.lagrangian1d.plate_problem import clean_window
 
     data["time"]["end"] = length / s.shock_speed + 0.95 * clean_window(sc, ratio * P0)
     return simulation.run(data)

@@ -237,7 +237,7 @@ def test_cylindrical_charge_runs_on_a_plane_grid_and_conserves():
 
 
 def test_half_cylinder_on_a_wall_with_the_automatic_remap_time():
-    from blastfsi.problems import euler as pe
+    from blastfsi.euler import problem as pe
     from blastfsi.materials.gases import GASES
     from blastfsi.scenario import parse
 

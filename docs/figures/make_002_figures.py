@@ -21,7 +21,7 @@ from blastfsi import simulation  # noqa: E402
 from blastfsi.diagnostics import front_position, l1_relative_error, zone_profile  # noqa: E402
 from blastfsi.exact import shock  # noqa: E402
 from blastfsi.exact.sedov import PlanarSedov  # noqa: E402
-from blastfsi.problems.plate1d import clean_window  # noqa: E402
+from blastfsi.lagrangian1d.plate_problem import clean_window  # noqa: E402
 
 HERE = Path(__file__).parent
 P0, RHO0 = 1.048e5, 1.225  # 002 Sec. 3 air (ERRATA 002-7)

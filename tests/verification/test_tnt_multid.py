@@ -19,7 +19,7 @@ import blastfsi
 from blastfsi.api import load
 from blastfsi.detonation import charge
 from blastfsi.materials import lookup
-from blastfsi.problems.euler import cell_volumes
+from blastfsi.euler.problem import cell_volumes
 from blastfsi.scenario import parse
 
 AIR = lookup("air")

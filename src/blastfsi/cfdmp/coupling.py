@@ -83,7 +83,7 @@ PRESENT = 1e-3  # smallest mass fraction of a material in the bridge cell whose 
 
 
 class Layout(NamedTuple):
-    """Traced arrays of the coupling layout (built by :mod:`blastfsi.problems.cfdmp`)."""
+    """Traced arrays of the coupling layout (built by :mod:`blastfsi.cfdmp.problem`)."""
 
     fictitious: jnp.ndarray  # (*shape) bool: box cells beyond the bridges
     parked: jnp.ndarray  # (*shape) bool: fictitious cells the scheme never reads

@@ -30,8 +30,10 @@ from blastfsi.scenario import AXES
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_row, tracer_summary
-from blastfsi.problems import cfdmp as problem
-from blastfsi.problems import euler as euler_problem
+from blastfsi.cfdmp import problem
+from blastfsi.euler import problem as euler_problem
+
+# blastfsi.plotting (matplotlib) is imported inside the plotting functions only: it loads when plots are drawn.
 
 
 class State(NamedTuple):

@@ -49,10 +49,11 @@ import numpy as np
 from blastfsi.detonation import remap as rm
 from blastfsi.euler.config import MIN_CELLS
 from blastfsi.euler.scenario import faces_toward
+from blastfsi.exact import kingery_bulmash as kb
 from blastfsi.scenario import AXES
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
-from blastfsi.problems.detonation import EXPLOSIVES, charge_mass, charge_radius
+from blastfsi.lagrangian1d.charge_problem import EXPLOSIVES, charge_mass, charge_radius
 from blastfsi.scenario import ScenarioError
 
 EULER_GEOMETRIES = ("spherical", "axisymmetric", "cartesian")
@@ -237,8 +238,6 @@ def probe_times(explosive: str, mass: float, r_lim: float, c0: float, burn: floa
     """End times of the 1D run that finds the blast's arrival at R_lim: for a TNT sphere first 1.5 x the
     Kingery-Bulmash arrival there (the 1D TNT blast arrives within 13 % of it at Z >= 0.5,
     docs/verification.md), then the sure bound R_lim / c0 + burn time (the blast front outruns sound)."""
-    from blastfsi.exact import kingery_bulmash as kb
-
     sure = r_lim / c0 + burn
     try:
         guess = 1.5 * float(kb.value("arrival_time", mass, r_lim)) if explosive == "tnt" and j == 2 else sure

@@ -46,7 +46,7 @@ import numpy as np
 
 from blastfsi.eos import jwl
 from blastfsi.eos.jwl import JWLParams
-from blastfsi.problems.detonation import MEASURE
+from blastfsi.lagrangian1d.charge_problem import MEASURE
 
 UNIT_BALL = {1: np.pi, 2: 4.0 / 3.0 * np.pi}  # B_j = MEASURE[j] / (j + 1): unit disc, unit sphere
 
@@ -159,7 +159,7 @@ def _sub_samples(edges_axes, geometry: str, n_sub: int, cells_idx):
 
 
 class Remapped(NamedTuple):
-    """Cell sums (physical) and the primitive fields for :mod:`blastfsi.problems.euler`."""
+    """Cell sums (physical) and the primitive fields for :mod:`blastfsi.euler.problem`."""
 
     mass: np.ndarray  # (*shape) [kg]
     products: np.ndarray

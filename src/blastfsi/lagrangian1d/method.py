@@ -1,6 +1,6 @@
 """The ``lagrangian1d`` method behind the driver's face (:class:`blastfsi.method.Method`):
-set-up from :mod:`blastfsi.problems.plate1d` (``[incident]``) or
-:mod:`blastfsi.problems.detonation` (``[charge]``), the vNR scheme of
+set-up from :mod:`blastfsi.lagrangian1d.plate_problem` (``[incident]``) or
+:mod:`blastfsi.lagrangian1d.charge_problem` (``[charge]``), the vNR scheme of
 :mod:`blastfsi.lagrangian1d.scheme`, the plate/gauge (or charge/KB) summary and plots."""
 from __future__ import annotations
 
@@ -9,10 +9,16 @@ from pathlib import Path
 import jax.numpy as jnp
 import numpy as np
 
+from blastfsi.detonation.cj import chapman_jouguet
+from blastfsi.detonation.kb_compare import compare
+from blastfsi.lagrangian1d import charge_problem as detonation
+from blastfsi.lagrangian1d import plate_problem as plate1d
 from blastfsi.lagrangian1d import scheme
 from blastfsi.lagrangian1d.scenario import Scenario
+from blastfsi.materials import lookup
 from blastfsi.method import Polyline, register
-from blastfsi.problems import detonation, plate1d
+
+# blastfsi.plotting (matplotlib) is imported inside the plotting functions only: it loads when plots are drawn.
 
 CJ_WINDOW = (0.5, 0.9)  # charge-radius fractions over which the burn front's pressure is averaged
 
@@ -157,10 +163,6 @@ def charge_summary(sc: Scenario, setup, hist: dict, state: scheme.State) -> dict
     """Charge, CJ check (burn front pressure vs the CJ pressure of the JWL set), energy budget and,
     per gauge, peak overpressure, positive impulse, arrival time (blast_maps definitions) beside
     the Kingery-Bulmash values for a spherical TNT charge."""
-    from blastfsi.detonation.cj import chapman_jouguet
-    from blastfsi.detonation.kb_compare import compare
-    from blastfsi.materials import lookup
-
     info = setup.info
     hx = lookup(sc.charge.explosive)
     cj = chapman_jouguet(hx.eos_params(), hx.E0)

@@ -231,7 +231,7 @@ class Scenario(ScenarioBase):
         return self
 
     def _charge_consistent(self):
-        from blastfsi.problems.detonation import explosive  # (it imports this module)
+        from blastfsi.lagrangian1d.charge_problem import explosive  # (it imports this module: a cycle)
 
         explosive(self.charge.explosive)  # a JWL explosive of the library, within its ranges
         if self.sweep is not None:
@@ -246,7 +246,7 @@ class Scenario(ScenarioBase):
         the air zones out to domain.length, none narrower than min(first_ratio, max_ratio) h."""
         zones = float(self.grid.cells)
         if self.charge is not None:
-            from blastfsi.problems.detonation import GEOMETRY, charge_radius, explosive
+            from blastfsi.lagrangian1d.charge_problem import GEOMETRY, charge_radius, explosive  # (as above)
 
             c, g = self.charge, self.grid
             radius = c.radius or charge_radius(c.mass, explosive(c.explosive).density, GEOMETRY[self.domain.geometry])

@@ -1,5 +1,5 @@
 """The ``mpm`` method behind the driver's face (:class:`blastfsi.method.Method`):
-particles and grid from :mod:`blastfsi.problems.mpm`, the MUSL step of
+particles and grid from :mod:`blastfsi.mpm.problem`, the MUSL step of
 :mod:`blastfsi.mpm.musl`, one ``timeloop.run_until``.
 
 Snapshot (:class:`blastfsi.method.Particles`, active particles): ``density``,
@@ -39,7 +39,9 @@ from blastfsi.method import Particles, register
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.scenario import MPMScenario
 from blastfsi.scenario import AXES
-from blastfsi.problems import mpm as problem
+from blastfsi.mpm import problem
+
+# blastfsi.plotting (matplotlib) is imported inside the plotting functions only: it loads when plots are drawn.
 
 VOIGT_TO_TENSOR = np.array([[0, 5, 4], [5, 1, 3], [4, 3, 2]])  # Voigt [xx, yy, zz, yz, xz, xy] -> 3 x 3
 

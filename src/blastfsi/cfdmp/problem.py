@@ -1,8 +1,8 @@
 """Initial data and the coupling layout of the ``cfdmp`` method (host side, NumPy; seed 000 Sec. 3).
 
-Composition, not duplication: the Eulerian part is :func:`blastfsi.problems.euler.build`
+Composition, not duplication: the Eulerian part is :func:`blastfsi.euler.problem.build`
 on the same domain, grid and initial condition; the structures are
-:func:`blastfsi.problems.mpm.build` on the MPM background grid. This module adds
+:func:`blastfsi.mpm.problem.build` on the MPM background grid. This module adds
 the coupling layout (cell indices in the Eulerian grid, C order):
 
 * the MPM box ``[box_lo, box_hi)`` in cells; a face of it not on the domain
@@ -34,8 +34,8 @@ from blastfsi.euler.method import GEOMETRY_CODE
 from blastfsi.euler.scenario import EulerScenario, gas_materials
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.mpm.scenario import MPMScenario, body_materials
-from blastfsi.problems import euler as euler_problem
-from blastfsi.problems import mpm as mpm_problem
+from blastfsi.euler import problem as euler_problem
+from blastfsi.mpm import problem as mpm_problem
 from blastfsi.scenario import AXES, ScenarioError, validate_model
 
 

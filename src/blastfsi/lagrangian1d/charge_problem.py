@@ -46,7 +46,7 @@ EXPLOSIVES = tuple(sorted(n for n, m in GASES.items() if isinstance(m, JWLExplos
 @dataclass(frozen=True)
 class Setup:
     """Initial data of a charge run (NumPy, host side); the fields of
-    :class:`blastfsi.problems.plate1d.Setup` plus geometry and per-zone materials."""
+    :class:`blastfsi.lagrangian1d.plate_problem.Setup` plus geometry and per-zone materials."""
 
     x: np.ndarray  # node radii (N+1,)
     v: np.ndarray
