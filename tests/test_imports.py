@@ -141,9 +141,6 @@ FUNCTION_IMPORTS = {
     ("blastfsi.scenario", "blastfsi.method"):
         "cycle: blastfsi.method imports blastfsi.scenario (ScenarioBase) at module level; parse() looks up the "
         "method registry when it runs",
-    ("blastfsi.lagrangian1d.scenario", "blastfsi.lagrangian1d.charge_problem"):
-        "cycle: charge_problem imports lagrangian1d.scenario (Scenario) at module level; the [charge] validator "
-        "and demands() call into it when they run",
     ("blastfsi.detonation.charge", "blastfsi.simulation"):
         "layering: the charge's 1D stage runs lagrangian1d through the driver (see LAYER_EXCEPTIONS); imported "
         "when a charge is set up, so that importing the methods never loads the driver",

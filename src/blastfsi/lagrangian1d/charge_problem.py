@@ -29,14 +29,17 @@ partly burnt during the release and the whole of Q is released.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from blastfsi.lagrangian1d.scenario import Scenario
 from blastfsi.lagrangian1d.scheme import zone_volume
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
 from blastfsi.scenario import ScenarioError
+
+if TYPE_CHECKING:  # annotations only: the scenario validates a [charge] with this module's functions
+    from blastfsi.lagrangian1d.scenario import Scenario
 
 GEOMETRY = {"planar": 0, "cylindrical": 1, "spherical": 2}
 MEASURE = {0: 1.0, 1: 2.0 * np.pi, 2: 4.0 * np.pi}  # physical amount per radian^j quantity

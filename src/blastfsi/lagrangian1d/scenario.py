@@ -15,6 +15,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Field, model_validator
 
+from blastfsi.lagrangian1d.charge_problem import GEOMETRY, charge_radius, explosive
 from blastfsi.scenario import Numerics as SharedNumerics
 from blastfsi.scenario import Output as SharedOutput
 from blastfsi.scenario import Demand, ScenarioBase, Strict, Sweep as SharedSweep, gauge_points
@@ -231,8 +232,6 @@ class Scenario(ScenarioBase):
         return self
 
     def _charge_consistent(self):
-        from blastfsi.lagrangian1d.charge_problem import explosive  # (it imports this module: a cycle)
-
         explosive(self.charge.explosive)  # a JWL explosive of the library, within its ranges
         if self.sweep is not None:
             raise ValueError("sweep: the plate sweeps need an [incident]; a [charge] run takes no sweep")
@@ -246,8 +245,6 @@ class Scenario(ScenarioBase):
         the air zones out to domain.length, none narrower than min(first_ratio, max_ratio) h."""
         zones = float(self.grid.cells)
         if self.charge is not None:
-            from blastfsi.lagrangian1d.charge_problem import GEOMETRY, charge_radius, explosive  # (as above)
-
             c, g = self.charge, self.grid
             radius = c.radius or charge_radius(c.mass, explosive(c.explosive).density, GEOMETRY[self.domain.geometry])
             zones += self.domain.length / (min(g.first_ratio, g.max_ratio) * radius / g.cells)
