@@ -41,17 +41,16 @@ alpha).
 """
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from blastfsi.euler import hllc
-from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import pad, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.hllc import NG
 from blastfsi.euler.mixture import volume_fractions
-from blastfsi.xla import fori, materialise
+from blastfsi.euler.splitting import split_step
+from blastfsi.xla import materialise
 
 
 def radial_source_factor(cfg: Config, dtype):
@@ -111,40 +110,7 @@ def sweep(rows, tau, eos_r, cfg: Config, lay, axis: int, record: bool = False):
 
 
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):
-    """L_z L_y L_x L_x L_y L_z, each operator with dt/2 (module docstring), the order of lax_wendroff.step.
-
-    The operators run in a fori_loop that switches between the ndim directional bodies (each compiled
-    once on the CPU; unrolled where loops cost a host round trip, :func:`blastfsi.xla.fori`); each sweeps
-    a large grid block by block (blocking.blocked). moved: None, or per axis a tuple of face-transfer
-    rows (faces 0..n of that axis) onto which the transfers of the operators along that axis are summed;
-    then (U_new, moved) is returned. Static: the plain step carries no transfers.
-    """
-    ndim = len(cfg.shape)
-    order = tuple(reversed(range(ndim))) + tuple(range(ndim))
-    rows = tuple(U)
-    nvar = len(rows)
-    tau = 0.5 * dt
-
-    def body(a):  # the operator along axis a on the loop state
-        if moved is None:
-            return lambda rows: blocked(lambda _, r: sweep(r, tau, eos_r, cfg, lay, a), (), rows, cfg, a)
-
-        def sweep_and_add(_, outs):  # outs: the rows, then the transfers of axis a so far
-            new, t = sweep(outs[:nvar], tau, eos_r, cfg, lay, a, record=True)
-            return new + tuple(m + x for m, x in zip(outs[nvar:], t))
-
-        def recording(state):  # the transfers of all axes are carried, those of axis a added to
-            rows, acc = state
-            out = blocked(sweep_and_add, (), rows + acc[a], cfg, a)
-            return out[:nvar], acc[:a] + (out[nvar:],) + acc[a + 1:]
-        return recording
-
-    branches = [body(a) for a in range(ndim)]
-
-    def operator(i, state):  # i traced in a loop, a Python int where the loop is unrolled (fori)
-        if isinstance(i, int):
-            return branches[order[i]](state)
-        return jax.lax.switch(jnp.asarray(order)[i], branches, state)
-
-    state = fori(2 * ndim, operator, rows if moved is None else (rows, tuple(moved)))
-    return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])
+    """L_z L_y L_x L_x L_y L_z, each operator with dt/2 (module docstring), the order of lax_wendroff.step; the
+    operators and the transfers (moved) as in :func:`blastfsi.euler.splitting.split_step`."""
+    return split_step(U, lambda _, rows, a, record: sweep(rows, 0.5 * dt, eos_r, cfg, lay, a, record=record), (),
+                      cfg, moved)

@@ -51,15 +51,13 @@ alpha du/dx term is a cell source too.
 """
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
-from blastfsi.euler.blocking import blocked
 from blastfsi.euler.boundaries import extend, extend_coefficient, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.mixture import cell_state, pressure_velocity
-from blastfsi.xla import fori
+from blastfsi.euler.splitting import split_step
 
 NG = 2  # ghost cells: theta (Eq. 4) of the cell next to a boundary face needs rho two cells out
 
@@ -146,46 +144,11 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False)
 def step(U, dt, eos_r, cfg: Config, lay, moved=None):
     """000 Eq. (6): L_z L_y L_x L_x L_y L_z, each operator with dt/2 (ERRATA 000-4).
 
-    The six operators run in a fori_loop that switches between the ndim
-    directional bodies, so each body is compiled once (on the CPU; unrolled
-    where loops cost a host round trip, :func:`blastfsi.xla.fori`). moved: None, or per
-    axis a tuple of face-transfer rows (faces 0..n of that axis) onto which
-    the transfers of the operators along that axis are summed; then
-    (U_new, moved) is returned. Static: the plain step carries no transfers.
+    The operators and the transfers (moved) as in :func:`blastfsi.euler.splitting.split_step`.
     Recording reads the transfers off the operator's own intermediates (one
     pass; U_new agrees with the plain step's to round-off, not bit for bit:
     see blastfsi.euler.step.step_with_transfers).
     """
-    ndim = len(cfg.shape)
-    order = tuple(reversed(range(ndim))) + tuple(range(ndim))
-    rows = tuple(U)
-    c = jnp.sqrt(jnp.maximum(cell_state(rows, eos_r, lay).c2, 0.0))
-
-    def body(a):  # the operator along axis a on the loop state
-        def plain(rows):
-            return blocked(lambda cc, r: sweep(r, cc[0], 0.5 * dt, eos_r, cfg, lay, a), (c,), rows, cfg, a)
-
-        if moved is None:
-            return plain
-
-        nvar = len(rows)
-
-        def sweep_and_add(cc, outs):  # outs: the rows, then the transfers of axis a so far
-            new, t = sweep(outs[:nvar], cc[0], 0.5 * dt, eos_r, cfg, lay, a, record=True)
-            return new + tuple(m + x for m, x in zip(outs[nvar:], t))
-
-        def recording(state):  # the transfers of all axes are carried, those of axis a added to
-            rows, acc = state
-            out = blocked(sweep_and_add, (c,), rows + acc[a], cfg, a)
-            return out[:nvar], acc[:a] + (out[nvar:],) + acc[a + 1:]
-        return recording
-
-    branches = [body(a) for a in range(ndim)]
-
-    def operator(i, state):  # i traced in a loop, a Python int where the loop is unrolled (fori)
-        if isinstance(i, int):
-            return branches[order[i]](state)
-        return jax.lax.switch(jnp.asarray(order)[i], branches, state)
-
-    state = fori(2 * ndim, operator, rows if moved is None else (rows, tuple(moved)))
-    return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])
+    c = jnp.sqrt(jnp.maximum(cell_state(tuple(U), eos_r, lay).c2, 0.0))  # the start's c (module docstring)
+    return split_step(U, lambda cc, rows, a, record: sweep(rows, cc[0], 0.5 * dt, eos_r, cfg, lay, a, record=record),
+                      (c,), cfg, moved)
