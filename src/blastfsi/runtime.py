@@ -139,7 +139,8 @@ def _traced(fn, args: tuple, digest: str):
     """The stored :class:`jax.export.Exported` of ``fn`` at ``args`` (``digest``: :func:`_digest`), exported
     and stored now if it is not there or cannot be read back; None where jax.export cannot carry the program
     (e.g. a custom call without a stability guarantee: then traced as usual, which also raises any error
-    of the program itself)."""
+    of the program itself), or does not call it as the run does (a program over several devices, a grid
+    split by ``numerics.devices``: it is traced as usual, twice where the cache is on)."""
     file = Path(_claimed[0]) / "traced" / f"{digest}.exported"
     if file.is_file():
         try:
@@ -148,6 +149,8 @@ def _traced(fn, args: tuple, digest: str):
             pass
     try:
         program = export.export(jax.jit(fn))(*args)
+        if program.nr_devices > 1:  # (a grid split across devices: its program, called with arguments on one
+            return None             # device, is refused by jax.export; traced as usual, and not stored)
         blob = program.serialize()
     except Exception:  # noqa: BLE001  (see the docstring)
         return None

@@ -24,9 +24,11 @@ def blocks(cfg: Config, axis: int):
     Measured with jax 0.10 on this 2-core CPU (docs/verification.md): Lax-Wendroff's blocks are 1.3-1.7x
     faster on 64^3, 128^3, 512^2 and 1024^2 grids and 1.8x slower on 200^2, hence BLOCKED_ABOVE;
     HLLC-MUSCL's (its flux divergence per axis) 2.1x faster at 128^3. CPU only
-    (:func:`blastfsi.xla.blocked_sweeps`).
+    (:func:`blastfsi.xla.blocked_sweeps`), and not on a grid split across devices (cfg.devices > 1: a block's
+    dynamic slice across the split axis would gather the whole grid on every device).
     """
-    if len(cfg.shape) == 1 or math.prod(cfg.shape) <= BLOCKED_ABOVE or not xla.blocked_sweeps():
+    if (len(cfg.shape) == 1 or math.prod(cfg.shape) <= BLOCKED_ABOVE or not xla.blocked_sweeps()
+            or cfg.devices > 1):
         return None
     b = 0 if axis != 0 else 1
     m = cfg.shape[b]

@@ -13,6 +13,7 @@ receive the incoming blast through the scheme's own fluxes.
 """
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from blastfsi.euler.config import OUTFLOW, PERIODIC, BlastTable, Layout
@@ -69,13 +70,18 @@ def extend_coefficient(k, axis, kinds):
     lo_kind, hi_kind = kinds
     n = k.shape[axis]
 
-    def ghost(kind, upper):
-        if kind == OUTFLOW:
-            return jnp.zeros_like(_slice(k, axis, 0, 1))
+    def ghost(kind, upper):  # (an outflow face's: the edge cell, zeroed below)
         if kind == PERIODIC:
             return _slice(k, axis, 0, 1) if upper else _slice(k, axis, n - 1, n)
         return _slice(k, axis, n - 1, n) if upper else _slice(k, axis, 0, 1)
-    return jnp.concatenate([ghost(lo_kind, False), k, ghost(hi_kind, True)], axis=axis)
+    out = jnp.concatenate([ghost(lo_kind, False), k, ghost(hi_kind, True)], axis=axis)
+    if OUTFLOW not in kinds:
+        return out
+    # zeroed by a select, not a concatenated zero: on a 1D grid split across devices XLA's partitioner
+    # gathers the whole array for the latter (jax 0.10), and exchanges only the edge cells for this
+    i = jax.lax.broadcasted_iota(jnp.int32, out.shape, axis)
+    zero = ((i == 0) if lo_kind == OUTFLOW else False) | ((i == n + 1) if hi_kind == OUTFLOW else False)
+    return jnp.where(zero, jnp.zeros((), k.dtype), out)
 
 
 def blast_rows(table: BlastTable, t, dtype):

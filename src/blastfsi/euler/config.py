@@ -35,7 +35,8 @@ class Config(NamedTuple):
     scheme: 0 Lax-Wendroff (000 Sec. 2.1), 1 HLLC-MUSCL (unsplit), 2 HLLC-Hancock
     (split MUSCL-Hancock); n_materials: 1, or 2 for [products, air]; origin:
     lower corner of the grid [m]; limiter: the slope limiter of the two HLLC
-    schemes, 0 van Leer, 1 minmod, 2 monotonized central (unused by Lax-Wendroff).
+    schemes, 0 van Leer, 1 minmod, 2 monotonized central (unused by Lax-Wendroff); devices: the
+    devices the grid is split across along axis 0 (:func:`blastfsi.xla.grid_sharding`; 1: not split).
     """
 
     shape: tuple
@@ -46,6 +47,7 @@ class Config(NamedTuple):
     n_materials: int
     origin: tuple
     limiter: int = VAN_LEER
+    devices: int = 1
 
 
 class BlastTable(NamedTuple):

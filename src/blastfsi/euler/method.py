@@ -5,16 +5,17 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from blastfsi import euler as kernels
-from blastfsi import timeloop
+from blastfsi import timeloop, xla
 from blastfsi.detonation import kb_compare
 from blastfsi.detonation.kb_compare import scenario_references
 from blastfsi.diagnostics import blast_maps
 from blastfsi.euler.scenario import EulerScenario
-from blastfsi.scenario import AXES
+from blastfsi.scenario import AXES, ScenarioError
 from blastfsi.method import Grid, register
 from blastfsi.euler import problem
 
@@ -62,11 +63,39 @@ def _pressure(U, params: Params, cfg):
     return kernels.primitives(U, params.kernel, cfg)["pressure"]
 
 
+def devices(sc: EulerScenario) -> int:
+    """numerics.devices as a number of devices; ScenarioError naming the key where JAX sees fewer, or
+    ("all") where grid.cells is not divisible by them."""
+    try:
+        n = xla.device_count(sc.numerics.devices)
+    except ValueError as err:
+        raise ScenarioError(str(err)) from None
+    if sc.numerics.devices == "all" and sc.grid.cells % n:
+        raise ScenarioError(f"numerics.devices = \"all\" is {n} devices here, and grid.cells = {sc.grid.cells} is not "
+                            f"divisible by {n} (the grid is split along x in equal slabs); give grid.cells a multiple "
+                            f"of {n}, or numerics.devices a divisor of {sc.grid.cells}")
+    return n
+
+
+def placed(s: State, cfg) -> State:
+    """``s`` with its grid-shaped leaves (U and the blast maps) constrained to the split of the grid across
+    cfg.devices devices along x (:func:`blastfsi.xla.grid_sharding`); unchanged on one device. Inside the
+    compiled loop: the compiler partitions every computation on them by slab and exchanges halos."""
+    if cfg.devices <= 1:
+        return s
+    ndim = len(cfg.shape)
+    grid = xla.grid_sharding(cfg.devices, ndim)
+    rows = xla.grid_sharding(cfg.devices, ndim + 1, axis=1)
+    keep = jax.lax.with_sharding_constraint
+    return s._replace(U=keep(s.U, rows), **{k: keep(getattr(s, k), grid) for k in blast_maps.BlastMaps._fields})
+
+
 class Euler:
     name = "euler"
     scenario_model = EulerScenario
 
     def build(self, sc: EulerScenario) -> problem.Setup:
+        devices(sc)  # (before a charge's 1D detonation)
         return problem.build(sc)
 
     def _cfg(self, setup: problem.Setup, sc: EulerScenario) -> kernels.Config:
@@ -74,7 +103,7 @@ class Euler:
                               geometry=GEOMETRY_CODE[setup.grid.geometry], bc=setup.bc,
                               scheme=SCHEME_CODE[sc.numerics.scheme], n_materials=len(setup.materials),
                               origin=tuple(float(v) for v in setup.grid.lower),
-                              limiter=LIMITER_CODE[sc.numerics.limiter])
+                              limiter=LIMITER_CODE[sc.numerics.limiter], devices=devices(sc))
 
     def static(self, setup: problem.Setup, sc: EulerScenario) -> Static:
         flat = tuple(int(np.ravel_multi_index(c, setup.grid.shape)) for c in setup.gauge_cells)
@@ -109,7 +138,7 @@ class Euler:
             U = kernels.step(s.U, dt, params.kernel, cfg, s.t)
             dp = _pressure(U, params, cfg) - params.reference_pressure
             maps = blast_maps.update(_maps(s), dp, s.t, dt, params.arrival_threshold)
-            return s._replace(U=U, **maps._asdict())
+            return placed(s._replace(U=U, **maps._asdict()), cfg)
 
         def history_row(s):
             prim = kernels.primitives(s.U, params.kernel, cfg)
@@ -120,7 +149,7 @@ class Euler:
             per_gauge = jnp.stack(flat, axis=1).reshape(-1)
             return jnp.concatenate([jnp.stack([s.t, mass, energy]), momentum, per_gauge])
 
-        return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
+        return timeloop.run_until(placed(state, cfg), t_stop, max_steps, sample_interval, dt_floor_fraction,
                                   stable_dt=stable_dt, step=step, history_row=history_row)
 
     def history_columns(self, setup: problem.Setup, sc: EulerScenario) -> tuple:

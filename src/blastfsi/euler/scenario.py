@@ -157,6 +157,7 @@ class Grid(Strict):
 # summed signal speeds; the split schemes' operators run at cfl / 2, linear limit 2, measured stable on Sod and 2D
 # blasts of pressure ratio 1e5 up to 1.5 (lax-wendroff) and 2.2 (hllc-hancock): 1.5 keeps both inside.
 UNSPLIT_CFL_MAX, SPLIT_CFL_MAX = 1.0, 1.5
+MAX_DEVICES = 4096  # numerics.devices
 
 
 class Numerics(SharedNumerics):
@@ -172,6 +173,10 @@ class Numerics(SharedNumerics):
     limiter: Limiter = Field("van-leer", description=(
         "slope limiter of the reconstruction of hllc-muscl and hllc-hancock: van-leer (default), minmod (most "
         "diffusive) or mc (monotonized central, the sharpest); ignored by lax-wendroff"))
+    devices: Union[Annotated[int, Field(ge=1, le=MAX_DEVICES)], Literal["all"]] = Field(1, description=(
+        "devices (GPUs of this machine; an integer >= 1) the grid is split across, along x in equal slabs "
+        "(grid.cells divisible by it), stepped together as one program that exchanges the slabs' boundary "
+        "cells; 'all': every device JAX sees. Results agree with one device's to round-off"))
 
     @model_validator(mode="after")
     def _cfl_of_the_scheme(self):
@@ -214,6 +219,15 @@ def check_plot_plane(output: EulerOutput, domain) -> None:
     if not domain.lower[2] <= z <= domain.upper[2]:
         raise ValueError(f"output.plot_plane_z = {z:g} m must lie in the domain's z extent "
                          f"[{domain.lower[2]:g}, {domain.upper[2]:g}] m")
+
+
+def check_devices(devices, cells: int) -> None:
+    """numerics.devices (an int; "all" is checked when the run knows the devices): the x slabs must be equal."""
+    if devices != "all" and cells % devices:
+        allowed = [n for n in range(1, min(cells, 64) + 1) if cells % n == 0]
+        raise ValueError(f"numerics.devices = {devices}: the grid is split along x in equal slabs, and grid.cells = "
+                         f"{cells} is not divisible by it; give grid.cells a multiple of {devices}, or "
+                         f"numerics.devices one of {allowed}")
 
 
 def gas_materials(initial) -> dict[str, str]:
@@ -336,6 +350,7 @@ class EulerScenario(ScenarioBase):
                              f"(initial.kind = 'charge'), not initial.kind = {self.initial.kind!r}")
         if self.sweep is not None and self.sweep.energy is not None and self.initial.kind != "point-energy":
             raise ValueError("sweep.energy needs initial.kind = 'point-energy'")
+        check_devices(self.numerics.devices, self.grid.cells)
         return self
 
     def demands(self) -> list[Demand]:
