@@ -202,8 +202,7 @@ def test_recording_leaves_the_step_unchanged(scheme, case):
 
 @pytest.mark.parametrize("scheme, case", [(s, c) for s in (euler.LAX_WENDROFF, euler.HLLC_MUSCL)
                                            for c in ("2d", "axisymmetric")]
-                         + [(euler.HLLC_HANCOCK, "2d"), pytest.param(euler.HLLC_HANCOCK, "axisymmetric",
-                                                                     marks=pytest.mark.slow)])
+                         + [pytest.param(euler.HLLC_HANCOCK, c, marks=pytest.mark.slow) for c in ("2d", "axisymmetric")])
 def test_blocked_sweeps_equal_the_whole_grid(scheme, case, monkeypatch):
     """All schemes sweep grids of more than blocking.BLOCKED_ABOVE cells block by block (a loop over
     slabs along another axis, updated in place: the directional operators of Lax-Wendroff and
@@ -211,7 +210,8 @@ def test_blocked_sweeps_equal_the_whole_grid(scheme, case, monkeypatch):
     and transfers: the same per-cell arithmetic, so equal up to how XLA contracts multiply-adds (a few
     ulp of each row's scale, as in test_recording_leaves_the_step_unchanged). The shipped threshold
     leaves every test grid whole, so the blocks are forced here: several planes per block on one axis,
-    one plane on the other. (HLLC-Hancock's r-z case runs with -m slow, for its compile time.)"""
+    one plane on the other. (HLLC-Hancock's cases run with -m slow, for their compile time: its operators share
+    lax_wendroff's split_step and blocking, which the default cases cover.)"""
     from blastfsi.euler import blocking
 
     shape, geom, bc, n = CASES[case]
