@@ -1,0 +1,163 @@
+"""Table 2 of the CFDMP paper (Sec. 5.4): the six clamped RHA plates of Neuberger, Peles & Rittel (2007), run
+as shipped (``steel-plate-blast``, ``steel-plate-blast-case2`` ... ``-case6``) with the two idealisations of
+the test rig's clamp:
+
+* ``fixed``: the plate's rim (r > D/2, under the clamping plates) held at rest, as shipped;
+* ``sliding``: the rim held only along the plate's normal (``supports.hold = ["y"]``): the two thick clamping
+  plates hold its faces and it pulls in without friction;
+* ``sliding-wide``: as ``sliding`` with the rim widened from 0.12 to 0.2 of the free radius (the plate to the
+  edge of the MPM box): how much the rim's hoop compression, which resists the pull-in, matters.
+
+    python docs/figures/make_plate_table2.py run DIR [--cases 1 4] [--clamps fixed sliding] [--cells N]
+    python docs/figures/make_plate_table2.py figures DIR    # plate_table2.json, plate_table2.png here; table
+
+Each run is its own process (``one``) and writes ``DIR/case<k>-<clamp>[-c<cells>].json``: the centre's
+deflection history (the tracer at mid-thickness on the axis), its peak and when, the last value, the steps, the
+loop time and the mass/energy budget residuals. ``--cells`` overrides the grid (the three-grid study of case 1:
+80, 120, 180 cells = 3.75, 2.5, 1.67 mm). ``run`` skips runs whose JSON exists.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).parent
+JSON = HERE / "plate_table2.json"
+PNG = HERE / "plate_table2.png"
+
+CLAMPS = ("fixed", "sliding", "sliding-wide")
+EXAMPLES = {"1": "steel-plate-blast", **{k: f"steel-plate-blast-case{k}" for k in "23456"}}
+THICKNESS = {"1": 0.01, "2": 0.02, "3": 0.04, "4": 0.01, "5": 0.02, "6": 0.04}  # t [m], Table 1
+# Table 2, delta / t: experiment (Neuberger et al. 2007), the paper's CFDMP, LS-DYNA (None: not given)
+TABLE2 = {"1": (2.60, 2.69, 2.59), "2": (2.70, 2.71, 2.62), "3": (None, 2.68, None),
+          "4": (4.85, 5.2, 4.98), "5": (5.35, 5.45, 5.24), "6": (None, 5.625, None)}
+
+
+def scenario(case: str, clamp: str, cells: int | None) -> dict:
+    from blastfsi.api import example_data
+
+    data = example_data(EXAMPLES[case])
+    if clamp.startswith("sliding"):
+        for s in data["structures"]:
+            s["supports"] = [{**sup, "hold": ["y"]} for sup in s.get("supports", [])]
+    if clamp == "sliding-wide":
+        edge = data["mpm_region"]["upper"][0]
+        for s in data["structures"]:
+            s["upper"][0] = edge
+            for sup in s["supports"]:
+                sup["upper"][0] = edge
+    if cells is not None:
+        data["grid"]["cells"] = cells
+    data["output"]["plots"] = False
+    data["output"]["fields"] = 0
+    data["output"]["checkpoint_interval"] = None
+    return data
+
+
+def name(case: str, clamp: str, cells: int | None) -> str:
+    return f"case{case}-{clamp}" + ("" if cells is None else f"-c{cells}")
+
+
+def cmd_one(case: str, clamp: str, cells: int | None, folder: Path) -> None:
+    import blastfsi
+
+    res = blastfsi.run(scenario(case, clamp, cells))
+    s, h = res.summary, res.history
+    t = np.asarray(h["time"])
+    w = np.asarray(h["tracer0_displacement_y"])
+    k = int(np.argmax(w))
+    out = {"case": case, "clamp": clamp, "cells": cells, "thickness": THICKNESS[case],
+           "peak": float(w[k]), "peak_time": float(t[k]), "last": float(w[-1]), "end_time": float(t[-1]),
+           "steps": s["steps"], "loop_s": round(float(s["loop_time"]), 1),
+           "mass_residual": s["budget"]["mass_residual_relative"],
+           "energy_residual": s["budget"]["energy_residual_relative"],
+           "time": t.tolist(), "deflection": w.tolist()}
+    (folder / f"{name(case, clamp, cells)}.json").write_text(json.dumps(out) + "\n")
+    print(f"{name(case, clamp, cells)}: delta/t = {out['peak'] / THICKNESS[case]:.3f} at {out['peak_time'] * 1e3:.3f} ms"
+          f" (last {out['last'] / THICKNESS[case]:.3f}), {out['steps']} steps, loop {out['loop_s']} s")
+
+
+def cmd_run(folder: Path, cases, clamps, cells) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    for case in cases:
+        for clamp in clamps:
+            if (folder / f"{name(case, clamp, cells)}.json").is_file():
+                continue
+            args = [sys.executable, __file__, "one", case, clamp, str(folder)] + ([] if cells is None
+                                                                                 else ["--cells", str(cells)])
+            subprocess.run(args, check=True)
+
+
+def cmd_figures(folder: Path) -> None:
+    runs = [json.loads(p.read_text()) for p in sorted(folder.glob("case*.json"))]
+    JSON.write_text(json.dumps({"runs": runs, "table2": TABLE2}, indent=1) + "\n")
+    print("| case | experiment | paper's CFDMP | LS-DYNA | clamp | cells | this code δ/t (at) | vs experiment | last |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for r in sorted(runs, key=lambda r: (r["case"], r["clamp"], r["cells"] or 0)):
+        exp, paper, dyna = TABLE2[r["case"]]
+        ratio = r["peak"] / r["thickness"]
+        rel = "–" if exp is None else f"{100 * (ratio / exp - 1):+.1f} %"
+        fmt = lambda v: "–" if v is None else f"{v:g}"  # noqa: E731
+        print(f"| {r['case']} | {fmt(exp)} | {fmt(paper)} | {fmt(dyna)} | {r['clamp']} | {r['cells'] or 'shipped'} "
+              f"| {ratio:.3f} ({r['peak_time'] * 1e3:.2f} ms) | {rel} | {r['last'] / r['thickness']:.3f} |")
+    _figure(runs)
+
+
+def _figure(runs) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    colours = {}
+    for r in sorted(runs, key=lambda r: (r["case"], r["clamp"], r["cells"] or 0)):
+        if r["cells"] is not None:
+            continue
+        c = colours.setdefault(r["case"], f"C{len(colours)}")
+        ax.plot(np.asarray(r["time"]) * 1e3, np.asarray(r["deflection"]) / r["thickness"], color=c,
+                ls="-" if r["clamp"] == "sliding" else "--", label=f"case {r['case']}, {r['clamp']} clamp")
+        exp = TABLE2[r["case"]][0]
+        if exp is not None:
+            ax.axhline(exp, color=c, lw=0.8, ls=":")
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("centre deflection δ / t")
+    ax.set_title("Table 2 plates: centre deflection (dotted: experiment)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(PNG, dpi=120)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    one = sub.add_parser("one")
+    one.add_argument("case", choices=sorted(EXAMPLES))
+    one.add_argument("clamp", choices=CLAMPS)
+    one.add_argument("dir", type=Path)
+    one.add_argument("--cells", type=int)
+    run = sub.add_parser("run")
+    run.add_argument("dir", type=Path)
+    run.add_argument("--cases", nargs="+", default=["1", "4"], choices=sorted(EXAMPLES))
+    run.add_argument("--clamps", nargs="+", default=["fixed", "sliding"], choices=CLAMPS)
+    run.add_argument("--cells", type=int)
+    fig = sub.add_parser("figures")
+    fig.add_argument("dir", type=Path)
+    a = p.parse_args(argv)
+    if a.cmd == "one":
+        cmd_one(a.case, a.clamp, a.cells, a.dir)
+    elif a.cmd == "run":
+        cmd_run(a.dir, a.cases, a.clamps, a.cells)
+    else:
+        cmd_figures(a.dir)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
