@@ -2,6 +2,7 @@
 
     python docs/figures/make_slab_figures.py run DIR [RUN ...]   # the runs below into DIR/RUN (all by default)
     python docs/figures/make_slab_figures.py figures DIR         # concrete_slab.json + PNGs here, from DIR
+    python docs/figures/make_slab_figures.py point               # the top face as one material point (seconds)
 
 Runs (``blastfsi.run`` on the shipped examples with the overrides named; each writes DIR/RUN):
 
@@ -11,6 +12,10 @@ Runs (``blastfsi.run`` on the shipped examples with the overrides named; each wr
   model's grid and box);
 * ``3d-4kg-25mm``: ``concrete-slab-blast-3d``, the quarter model of the square slab, 25 mm cells;
 * ``defect-4kg-5mm``: the shipped ``concrete-slab-defect`` (Sec. 5.5), beside ``rz-4kg-5mm``.
+
+``point``: one particle of ``concrete-25mpa`` in the top face's state, uniaxial strain, loaded to a peak axial
+stress S at a strain rate of 10^3 /s and released to zero axial stress; its HJC damage D at the end, for the peak
+loads of the runs and of Kingery-Bulmash, and the largest D any S up to 1 GPa gives (into concrete_slab.json).
 
 The crushing diameter is the summary's ``structures.faces[k].crushing_diameter`` (the zone around the axis
 whose top-face particles failed; blastfsi.diagnostics.damage); Eq. (67) from blastfsi.exact.concrete_crushing.
@@ -112,8 +117,10 @@ def figures(folder: Path) -> None:
     rows = [_row(n, json.loads((folder / n / "summary.json").read_text()))
             for n in RUNS if (folder / n / "summary.json").exists()]
     eq67 = {f"{w:g}": crushing_diameter(w, HEIGHT) for w in MASSES}
-    (HERE / "concrete_slab.json").write_text(json.dumps(
-        {"height": HEIGHT, "experiment": {f"{k:g}": v for k, v in EXPERIMENT.items()},
+    path = HERE / "concrete_slab.json"
+    kept = {k: v for k, v in (json.loads(path.read_text()) if path.exists() else {}).items() if k == "material_point"}
+    path.write_text(json.dumps(
+        {**kept, "height": HEIGHT, "experiment": {f"{k:g}": v for k, v in EXPERIMENT.items()},
          "paper_cfdmp": {f"{k:g}": v for k, v in PAPER.items()}, "eq67": eq67, "runs": rows}, indent=1))
 
     fig, ax = plt.subplots(figsize=(6, 4.5))
@@ -148,6 +155,51 @@ def figures(folder: Path) -> None:
     print(markdown_tables(rows, eq67))
 
 
+POINT_LOADS = {"4 kg, this code (5 mm)": 57.8e6, "4 kg, Kingery-Bulmash reflected": 76.6e6,
+               "10 kg, this code (5 mm)": 140.8e6, "20 kg, this code (5 mm)": 282.4e6}  # Pa, on the axis (tables)
+
+
+def uniaxial_strain_damage(peak: float, rate: float = 1e3, increment: float = 2e-6) -> float:
+    """HJC damage of one ``concrete-25mpa`` particle compressed in uniaxial strain (z) to the axial stress
+    ``peak`` [Pa] and released to zero axial stress, at ``rate`` [1/s] in strain steps of ``increment``."""
+    import jax
+    import jax.numpy as jnp
+
+    from blastfsi.constitutive import PointState, hjc
+    from blastfsi.materials import SOLIDS
+
+    with jax.enable_x64(True):
+        p = hjc.params_from(SOLIDS["concrete-25mpa"])
+        update = jax.jit(lambda ps, de: hjc.update(ps, de, jnp.zeros((1, 3, 3)), increment / rate, p))
+        ps = PointState(jnp.zeros((1, 6)), jnp.full((1,), p.density), jnp.zeros(1), jnp.zeros(1), jnp.zeros(1),
+                        jnp.zeros((1, 4)))
+        for sign in (-1.0, 1.0):  # load, then release
+            de = jnp.zeros((1, 3, 3)).at[0, 2, 2].set(sign * increment)
+            while True:
+                ps = update(ps._replace(density=ps.density / (1.0 + sign * increment)), de)
+                axial = -float(ps.stress[0, 2])
+                if (axial >= peak) if sign < 0 else (axial <= 0.0):
+                    break
+        return float(ps.history[0, 2])
+
+
+def material_point() -> dict:
+    """The top face as one material point: D after each load of POINT_LOADS, and over peaks up to 1 GPa."""
+    loads = {name: {"peak": s, "damage": uniaxial_strain_damage(s)} for name, s in POINT_LOADS.items()}
+    sweep = {f"{s / 1e6:g}": uniaxial_strain_damage(s) for s in (250e6, 500e6, 1000e6)}
+    out = {"path": "uniaxial strain, loaded to the peak axial stress at 1e3 /s, released to zero axial stress",
+           "loads": loads, "sweep_peak_MPa": sweep}
+    path = HERE / "concrete_slab.json"
+    data = json.loads(path.read_text()) if path.exists() else {}
+    path.write_text(json.dumps({**data, "material_point": out}, indent=1))
+    print("| load | peak axial stress [MPa] | HJC damage D after release |\n|---|---|---|")
+    for name, v in loads.items():
+        print(f"| {name} | {v['peak'] / 1e6:.1f} | {v['damage']:.3f} |")
+    for s, d in sweep.items():
+        print(f"| sweep | {s} | {d:.3f} |")
+    return out
+
+
 def markdown_tables(rows: list[dict], eq67: dict) -> str:
     """The tables of docs/validation.md (Sec. 2), from the runs' rows."""
     def mm(v):
@@ -173,5 +225,5 @@ def markdown_tables(rows: list[dict], eq67: dict) -> str:
         "\n".join(loads)
 
 if __name__ == "__main__":
-    command, folder = sys.argv[1], Path(sys.argv[2])
-    {"run": lambda: run(folder, sys.argv[3:]), "figures": lambda: figures(folder)}[command]()
+    command, folder = sys.argv[1], Path(sys.argv[2]) if len(sys.argv) > 2 else None
+    {"run": lambda: run(folder, sys.argv[3:]), "figures": lambda: figures(folder), "point": material_point}[command]()
