@@ -20,7 +20,7 @@ def euler_charge(**initial):
 def test_charge_remapped_into_euler_conserves_and_runs():
     res = blastfsi.run(euler_charge())
     setup = res.setups[0]
-    info = setup.info
+    info = setup.charge
     for key in ("remap_mass_error", "remap_products_error", "remap_energy_error"):
         assert abs(info[key]) < 1e-12, key  # round-off (the remap's exact targets)
     # the conservative state the euler method builds from the remapped primitives holds the same sums

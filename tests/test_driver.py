@@ -89,15 +89,14 @@ class Decay:
 
     def advance(self, state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         rate, collapse, cfl = params
-        cells = jnp.asarray(static, jnp.int32)
         return timeloop.run_until(
             state, t_stop, max_steps, sample_interval, dt_floor_fraction,
             stable_dt=lambda s: jnp.where(jnp.isfinite(collapse), cfl * (collapse - s.t), cfl / jnp.max(rate)),
             step=lambda s, dt: s._replace(y=s.y * jnp.exp(-rate * dt)),
-            history_row=lambda s: jnp.concatenate([jnp.stack([s.t, jnp.mean(s.y)]), s.y[cells]]))
+            history_row=lambda s: decay_history(static, s).values(s.t.dtype))
 
     def history_columns(self, setup, sc):
-        return (("time", "s"), ("mean", "-")) + tuple((f"gauge{k}_value", "-") for k in range(len(sc.output.gauges)))
+        return decay_history(self.static(setup, sc)).columns
 
     def snapshot(self, state, setup):
         return method.Grid(edges=(setup.edges,), cell_fields={"density": state.y,
@@ -111,6 +110,13 @@ class Decay:
 
     def plots(self, folder, sc, setups, histories, members, finals):
         (folder / "decay.txt").write_text("no plot\n")
+
+
+def decay_history(gauge_cells, s=None) -> timeloop.Row:
+    """The history row as named entries: its columns without a state, its values from ``s``."""
+    row = timeloop.Row().add("time", "s", lambda: s.t).add("mean", "-", lambda: jnp.mean(s.y))
+    return row.add_block([(f"gauge{k}_value", "-") for k in range(len(gauge_cells))],
+                         lambda: s.y[jnp.asarray(gauge_cells, jnp.int32)])
 
 
 method.register(Decay())
@@ -143,6 +149,22 @@ def test_schema_dispatches_on_the_method_key():
         parse(decay_data(output__gauges=[0.5, 1.5]))
     with pytest.raises(TypeError, match="lacks"):
         method.register(type("Faceless", (), {"name": "faceless"})())
+    half_pool = type("HalfPool", (Decay,), {"pool_leaf": "y"})()  # a GrowingPool needs all three members
+    with pytest.raises(TypeError, match=r"GrowingPool capability but lacks \['pool_needed', 'grow'\]"):
+        method.register(half_pool)
+    assert not isinstance(Decay(), method.GrowingPool) and not isinstance(half_pool, method.GrowingPool)
+
+
+def test_a_history_row_and_its_columns_come_from_the_same_entries():
+    setup = Decay().build(parse(decay_data()))
+    assert decay_history(setup.gauge_cells).columns == (("time", "s"), ("mean", "-"), ("gauge0_value", "-"),
+                                                         ("gauge1_value", "-"))
+    s = DecayState(jnp.arange(8.0), **timeloop.clock(3, 4, jnp.float64))
+    np.testing.assert_array_equal(decay_history(setup.gauge_cells, s).values(jnp.float64),
+                                  [0.0, 3.5, *np.arange(8.0)[list(setup.gauge_cells)]])
+    wrong = timeloop.Row().add_block([("a", "-"), ("b", "-")], lambda: jnp.zeros(3))
+    with pytest.raises(ValueError, match=r"history entries \['a', 'b'\]: 3 values"):
+        wrong.values(jnp.float64)
 
 
 def test_ensemble_histories_and_grid_snapshots_are_exact(tmp_path):

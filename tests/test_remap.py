@@ -217,7 +217,7 @@ def test_cylindrical_charge_runs_on_a_plane_grid_and_conserves():
     from blastfsi.materials.gases import GASES
 
     res = blastfsi.run(plane_charge(end=3e-5, remap_time=2e-5))  # 10 us after the remap
-    info = res.setups[0].info
+    info = res.setups[0].charge
     for key in ("remap_mass_error", "remap_products_error", "remap_energy_error"):
         assert abs(info[key]) < 1e-12, key  # round-off (the remap's exact targets)
     assert info["charge_mass"] == pytest.approx(np.pi * 0.05**2 * GASES["tnt"].density, rel=1e-14)  # kg/m
@@ -244,7 +244,7 @@ def test_half_cylinder_on_a_wall_with_the_automatic_remap_time():
     data = plane_charge(shape="hemisphere", center=[0.0, -0.3])
     data["boundaries"] = {"y": ["wall", "outflow"]}
     setup = pe.build(parse(data))
-    info = setup.info
+    info = setup.charge
     assert info["remap_share"] == 0.5  # the wall through the centre mirrors the other half
     assert info["charge_mass"] == pytest.approx(0.5 * np.pi * 0.05**2 * GASES["tnt"].density, rel=1e-14)
     assert info["kb_burst"] is None

@@ -120,7 +120,7 @@ def test_blast_face_reproduces_the_1d_blast_inside_the_domain(geometry):
     res = blastfsi.run(data)
     g = res.summary["gauges"][0]
     r = float(np.linalg.norm(gauge))
-    one = run_1d("tnt", res.setups[0].info["charge_radius"], CELLS_1D, AIR_RATIO, 1.5, 5e-4, GAS, [r],
+    one = run_1d("tnt", res.setups[0].charge["charge_radius"], CELLS_1D, AIR_RATIO, 1.5, 5e-4, GAS, [r],
                  history_samples=2001)
     g1 = one.summary["gauges"][0]
     c0 = np.sqrt(AIR.gamma * AIR.pressure / AIR.density)

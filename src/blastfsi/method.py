@@ -36,9 +36,8 @@ VECTOR_FIELDS = ("velocity",)  # fields with a trailing axis of length ndim in S
 
 
 class Setup(Protocol):
-    """What :meth:`Method.build` returns: host-side (NumPy) initial data of one member."""
-
-    info: dict  # JSON-able metadata (theory values, derived quantities), free for the method's summary
+    """What :meth:`Method.build` returns: host-side (NumPy) initial data of one member, typed as the method
+    likes; the driver reads only its number of cells."""
 
     @property
     def cells(self) -> int:  # total number of cells (zones) of the mesh
@@ -129,11 +128,10 @@ class Coupled:
 Snapshot = Union[Polyline, Grid, Particles, Coupled]
 
 
-class Method(Protocol):
-    """The face of a method. ``state`` is a NamedTuple of arrays that carries the
-    clock fields of :mod:`blastfsi.timeloop` (``CLOCK_FIELDS``, made with
-    ``timeloop.clock``) besides its own; checkpoints save and restore it by
-    field name. Host-side calls get one member's state as NumPy arrays."""
+class Solver(Protocol):
+    """What solves: a method's scenario model, its builder and its compiled step. ``state`` is a NamedTuple
+    of arrays that carries the clock fields of :mod:`blastfsi.timeloop` (``CLOCK_FIELDS``, made with
+    ``timeloop.clock``) besides its own; checkpoints save and restore it by field name."""
 
     name: str
     scenario_model: type[ScenarioBase]  # its pydantic model, with method: Literal[name]
@@ -153,6 +151,10 @@ class Method(Protocol):
     def advance(self, state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         """Pure, jittable, one member: ``timeloop.run_until`` with the method's step."""
 
+
+class Reporter(Protocol):
+    """What reports: the history's columns and the host-side views of one member's state (NumPy arrays)."""
+
     def history_columns(self, setup: Setup, sc) -> Sequence[tuple[str, str]]:
         """(name, SI unit) of each history column; first ``time``; gauge columns named
         ``gauge<k>_<quantity>`` (k the index in output.gauges)."""
@@ -162,8 +164,8 @@ class Method(Protocol):
 
     def summary(self, sc, setup: Setup, history: dict, state) -> dict:
         """The method's JSON-able summary quantities of one member (the driver adds
-        time, steps, cells, wall_time, compile_time, loop_time, output_time; pool_growths for a method
-        with the pool hooks below)."""
+        time, steps, cells, wall_time, compile_time, loop_time, output_time; pool_growths for a
+        :class:`GrowingPool`)."""
 
     def locate_fault(self, state, setup: Setup) -> str:
         """Where a faulted (or step-collapsed) member fails, e.g. 'zone 12 at x = 0.1 m'."""
@@ -173,17 +175,30 @@ class Method(Protocol):
         """Write the method's PNG plots into ``folder`` from each member's setup, history
         and final snapshot (``finals``, as returned by :meth:`snapshot`)."""
 
-    # Optional, for a method with a particle pool that may fill up (its advance passes ``pool_full`` to
-    # timeloop.run_until). The driver then enlarges the pool and goes on (blastfsi.simulation._grow):
-    # pool_leaf: str  -- name of a state leaf whose length (axis 0 of a member) is the pool's capacity
-    # def pool_needed(self, state, setup) -> int: the slots one member's (host) state needs
-    # def grow(self, setup, state, capacity) -> (setup, state) | None: one member's host state in a pool of
-    #     ``capacity`` slots (more than now), the new slots empty; None when the pool is fixed (the scenario
-    #     set its size), and the run then stops with the pool-full fault.
+
+class Method(Solver, Reporter, Protocol):
+    """The face of a method: a :class:`Solver` and a :class:`Reporter`."""
 
 
-FACE = ("name", "scenario_model", "build", "initial_state", "params", "static", "advance", "history_columns",
-        "snapshot", "summary", "locate_fault", "plots")
+@typing.runtime_checkable
+class GrowingPool(Protocol):
+    """An optional capability: a particle pool that may fill up (the method's advance passes ``pool_full`` to
+    ``timeloop.run_until``). The driver then enlarges the pool and goes on (:func:`blastfsi.simulation._grow`)."""
+
+    pool_leaf: str  # name of a state leaf whose length (axis 0 of a member) is the pool's capacity
+
+    def pool_needed(self, state, setup: Setup) -> int:
+        """The slots one member's (host) state needs."""
+
+    def grow(self, setup: Setup, state, capacity: int):
+        """(setup, state) of one member in a pool of ``capacity`` slots (more than now), the new slots empty;
+        None when the pool is fixed (the scenario set its size): the run then stops with the pool-full fault."""
+
+
+SOLVER_FACE = ("name", "scenario_model", "build", "initial_state", "params", "static", "advance")
+REPORTER_FACE = ("history_columns", "snapshot", "summary", "locate_fault", "plots")
+FACE = SOLVER_FACE + REPORTER_FACE
+POOL_FACE = ("pool_leaf", "pool_needed", "grow")
 METHODS: dict[str, Method] = {}
 _PACKAGE = Path(__file__).parent
 
@@ -193,6 +208,10 @@ def register(method: Method) -> Method:
     missing = [n for n in FACE if not hasattr(method, n)]
     if missing:
         raise TypeError(f"method {getattr(method, 'name', method)!r} lacks {missing} of the Method face")
+    pool = [n for n in POOL_FACE if hasattr(method, n)]
+    if pool and len(pool) < len(POOL_FACE):
+        raise TypeError(f"method {method.name!r} has {pool} of the GrowingPool capability but lacks "
+                        f"{[n for n in POOL_FACE if n not in pool]}")
     if not (isinstance(method.scenario_model, type) and issubclass(method.scenario_model, ScenarioBase)):
         raise TypeError(f"method {method.name!r}: scenario_model must derive from blastfsi.scenario.ScenarioBase "
                         "(shared name, time, output, numerics and sweep keys)")

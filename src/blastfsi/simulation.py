@@ -238,8 +238,8 @@ def _pool_size(method: methods.Method, state) -> int:
 
 def _grow(method: methods.Method, setups: list, state, capacity: int | None = None):
     """(setups, state) with every member's particle pool enlarged to one common capacity: ``capacity``, or
-    GROWTH x the largest need; None when the method cannot grow its pool (methods.Method, optional hooks)."""
-    if not hasattr(method, "grow"):
+    GROWTH x the largest need; None when the method cannot grow its pool (not a methods.GrowingPool)."""
+    if not isinstance(method, methods.GrowingPool):
         return None
     members = _members(state)
     if capacity is None:
@@ -254,7 +254,7 @@ def _grow(method: methods.Method, setups: list, state, capacity: int | None = No
 def fit_pool(method: methods.Method, setups: list, saved: dict, fresh):
     """(setups, fresh) with the particle pool of the freshly built state ``fresh`` enlarged to that of the
     checkpoint leaves ``saved`` (a pool that grew before the checkpoint); unchanged otherwise."""
-    name = getattr(method, "pool_leaf", None)
+    name = method.pool_leaf if isinstance(method, methods.GrowingPool) else None
     if name is None or name not in saved or np.shape(saved[name])[1] == _pool_size(method, fresh):
         return setups, fresh
     grown = _grow(method, setups, fresh, int(np.shape(saved[name])[1]))
@@ -350,7 +350,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
         def summary(host, status: str) -> list[dict]:  # of each member (host: the batched state on the host)
             timing = {"wall_time": wallclock.perf_counter() - started - grow_compile,  # (the time loop only)
                       "compile_time": compile_time, "loop_time": spent["loop"], "output_time": spent["output"],
-                      **({"pool_growths": growths} if hasattr(method, "grow") else {})}
+                      **({"pool_growths": growths} if isinstance(method, methods.GrowingPool) else {})}
             return _summaries(method, sc, member_scs, setups, host, status, timing)
 
         def outputs(t_stop, host):  # the schedule's at t_stop

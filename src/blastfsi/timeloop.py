@@ -55,6 +55,43 @@ FAULT_MESSAGES = {
 CLOCK_FIELDS = ("t", "dt_prev", "dt0", "step", "fault", "hist", "hist_next")
 
 
+class Row:
+    """A history row written as named entries, so that its columns and its values cannot drift apart.
+
+    A method writes one function that adds every entry in order, ``row.add(name, unit, value)`` or, for
+    several columns computed together, ``row.add_block([(name, unit), ...], values)``, where ``value`` and
+    ``values`` are nullary callables (a scalar; an array of as many elements as the block has columns).
+    :attr:`columns` (host side: the method's ``history_columns``) calls none of them, so the function may run
+    there without a state; :meth:`values` (under trace: the method's ``history_row``) calls them all.
+    """
+
+    def __init__(self):
+        self._entries = []  # (columns, callable)
+
+    def add(self, name: str, unit: str, value) -> "Row":
+        self._entries.append((((name, unit),), value))
+        return self
+
+    def add_block(self, columns, values) -> "Row":
+        self._entries.append((tuple(columns), values))
+        return self
+
+    @property
+    def columns(self) -> tuple:
+        return tuple(c for cols, _ in self._entries for c in cols)
+
+    def values(self, dtype):
+        parts = []
+        for cols, value in self._entries:
+            if not cols:
+                continue
+            part = jnp.reshape(jnp.asarray(value(), dtype), (-1,))
+            if part.shape[0] != len(cols):
+                raise ValueError(f"history entries {[c[0] for c in cols]}: {part.shape[0]} values")
+            parts.append(part)
+        return jnp.concatenate(parts)
+
+
 def clock(n_samples: int, n_columns: int, dtype) -> dict:
     """Initial values of the clock fields (splice into a method's State)."""
     zero = jnp.zeros((), dtype)

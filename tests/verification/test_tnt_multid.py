@@ -51,7 +51,7 @@ def cell_distance_bounds(g, centre):
 def test_axisym_remap_conserves_mass_and_keeps_products_in_the_fireball():
     # tiny grid (60 x 30 cells, dx = 10 cm), a coarse 1D run (40 zones across the charge) remapped at 0.2 ms
     sc, setup = euler_setup("tnt-free-air-axisym", {"grid.cells": 60, "initial.cells": 40, "initial.remap_time": 2e-4})
-    info, g = setup.info, setup.grid
+    info, g = setup.charge, setup.grid
     share = info["remap_share"]
     assert share == 0.5  # the symmetry plane z = 0 through the centre
     vol = cell_volumes(g)
@@ -159,7 +159,7 @@ def front(radius, dp):
 @pytest.mark.slow
 def test_axisym_just_after_the_remap_matches_the_1d_solution():
     sc, setup = euler_setup("tnt-free-air-axisym", {})
-    info, g = setup.info, setup.grid
+    info, g = setup.charge, setup.grid
     f = one_d_state(sc, info).fields()
     edges, p_1d = np.asarray(f["node_x"]), np.asarray(f["pressure"]) - setup.reference_pressure
     air = ~np.asarray(f["products_fraction"]).astype(bool)

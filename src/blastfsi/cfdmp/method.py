@@ -144,7 +144,7 @@ def system_totals(U, P: mpm.Particles, res: cp.Reservoirs, layout: cp.Layout, st
 class Cfdmp:
     name = "cfdmp"
     scenario_model = CfdmpScenario
-    pool_leaf = "mpm.particles.active"  # (the driver grows a full pool: blastfsi.method, optional hooks)
+    pool_leaf = "mpm.particles.active"  # a blastfsi.method.GrowingPool: the driver grows a full pool
 
     def build(self, sc: CfdmpScenario) -> problem.Setup:
         return problem.build(sc)
@@ -158,33 +158,34 @@ class Cfdmp:
         cfg = ek.Config(shape=e.grid.shape, dx=float(e.grid.dx), geometry=GEOMETRY_CODE[e.grid.geometry], bc=e.bc,
                         scheme=scheme, n_materials=len(e.materials),
                         origin=tuple(float(v) for v in e.grid.lower), limiter=limiter)
-        n_struct = int(setup.info["structure_particles"])
+        c = setup.coupling
+        n_struct = c.structure_particles
         # the structures fill the first slots of the pool and are never deleted; the gas lives after them
         slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)
                       for k in range(len(setup.models)))
-        mcfg = mpm.make_config(setup.grid, setup.models, shape=setup.info["shape_functions"], model_slots=slots,
-                               prescribed=setup.info["clamped"],
-                               blend=any(a > 0.0 for a in setup.info["pic_fraction"]),
-                               relax=relaxation.gas_materials(setup.models, setup.info["pressure_relaxation"]))
+        mcfg = mpm.make_config(setup.grid, setup.models, shape=c.shape_functions, model_slots=slots,
+                               prescribed=c.clamped,
+                               blend=any(a > 0.0 for a in c.pic_fraction),
+                               relax=relaxation.gas_materials(setup.models, c.pressure_relaxation))
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
         sizes = tuple(int(f.outside.size) for f in setup.faces)
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))
         coupling = cp.Static(cfg, mcfg, faces, sizes, tuple(setup.box_lo), tuple(setup.box_hi), offset,
-                             tuple(setup.gas_material), n_struct, int(setup.info["gas_particles_per_cell"]),
+                             tuple(setup.gas_material), n_struct, c.gas_particles_per_cell,
                              outflow_faces(setup))
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
-        return Static(coupling, flat, setup.capacity, setup.info["pool_margin"], tuple(setup.info["tracers"]))
+        return Static(coupling, flat, setup.capacity, c.pool_margin, c.tracers)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         e = setup.euler
-        info = setup.info
         nd = e.grid.ndim
         grid = setup.grid
-        kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(info["cfl"], dtype), euler_problem.blast_params(e, dtype))
-        mp = mpm.make_params(setup.model_params, cfl=info["mpm_cfl"], q_quadratic=info["q"][0], q_linear=info["q"][1],
-                             pic_fraction=info["pic_fraction"], reference_pressure=info["mpm_reference_pressure"],
+        kp = ek.Params(jnp.asarray(e.eos, dtype), jnp.asarray(e.cfl, dtype), euler_problem.blast_params(e, dtype))
+        c = setup.coupling
+        mp = mpm.make_params(setup.model_params, cfl=c.mpm_cfl, q_quadratic=c.q_quadratic, q_linear=c.q_linear,
+                             pic_fraction=c.pic_fraction, reference_pressure=c.mpm_reference_pressure,
                              dtype=dtype)
-        shape = mpm.SHAPES[info["shape_functions"]]
+        shape = mpm.SHAPES[c.shape_functions]
         if setup.ring_cells.size:
             ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(setup.ring_half, dtype), grid,
                                           shape)
@@ -225,8 +226,8 @@ class Cfdmp:
             box_lower=jnp.asarray(box_lo, dtype), box_upper=jnp.asarray(box_hi, dtype))
         x0 = np.zeros((0, 3)) if setup.structures is None else np.asarray(setup.structures.x)
         return Params(kp, _cast(mp, dtype), layout, jnp.asarray(e.reference_pressure, dtype),
-                      jnp.asarray(info["arrival_fraction"] * e.reference_pressure, dtype),
-                      jnp.asarray(info["activation_overpressure"], dtype), jnp.asarray(x0, dtype))
+                      jnp.asarray(e.arrival_fraction * e.reference_pressure, dtype),
+                      jnp.asarray(c.activation_overpressure, dtype), jnp.asarray(x0, dtype))
 
     @staticmethod
     def _initial_rows(setup: problem.Setup, kp: ek.Params, dtype):
@@ -261,10 +262,10 @@ class Cfdmp:
         maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
         clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
-        clock["t"] = jnp.asarray(setup.euler.info.get("remap_time", 0.0), dtype)
+        clock["t"] = jnp.asarray(setup.euler.charge.get("remap_time", 0.0), dtype)
         state = State(U, *maps, mpm=ms, reservoirs=res, budget=budget, coupled=jnp.asarray(False), baseline=zeros,
                       displaced=zeros, **clock)
-        if setup.info["activation_overpressure"] == 0.0:
+        if setup.coupling.activation_overpressure == 0.0:
             state = jax.jit(_activate, static_argnums=2)(state, prm, cs)
         return state
 
@@ -276,11 +277,8 @@ class Cfdmp:
         cs = static.coupling
         cfg, mcfg = cs.euler, cs.mpm
         lay = params.layout
-        gauges = jnp.asarray(static.gauge_cells, jnp.int32)
-        tracers = jnp.asarray(static.tracers, jnp.int32)  # (structure slots: never deleted or moved)
         d = len(cfg.shape)
         pref = params.mpm.reference_pressure
-        conserved = conserved_momentum_axes(cfg.geometry, d)
         n = cfg.n_materials
 
         def stable_dt(s):
@@ -337,41 +335,7 @@ class Cfdmp:
             return in_use + static.pool_margin > static.capacity
 
         def history_row(s):
-            P = s.mpm.particles
-            total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, lay, cs)
-            account = (total + s.budget.boundary_out).at[n:].add(-s.budget.reaction)
-            scale = jnp.where(s.coupled, jnp.abs(s.baseline), 1.0)
-            mass_residual = jnp.where(s.coupled, (jnp.sum(account[:n]) - jnp.sum(s.baseline[:n]))
-                                      / jnp.sum(scale[:n]), 0.0)
-            energy_residual = jnp.where(s.coupled, (account[-1] - s.baseline[-1]) / scale[-1], 0.0)
-            # with the MPM steps' change and the face pressure transfer booked: the transport alone
-            exchange = s.budget.mpm_step - s.budget.pressure_transfer
-            transport = account[n:] - s.baseline[n:] - exchange
-            # momentum relative to sqrt(2 M E) at activation (the momentum the system's energy could carry)
-            p_scale = jnp.where(s.coupled, jnp.sqrt(2.0 * jnp.sum(scale[:n]) * scale[-1]), 1.0)
-            momentum_residuals = []
-            for a in conserved:
-                momentum_residuals += [jnp.where(s.coupled, (account[n + a] - s.baseline[n + a]) / p_scale, 0.0),
-                                       jnp.where(s.coupled, transport[a] / p_scale, 0.0)]
-            U = self._view(s, cs, lay)
-            prim = cp.flat_primitives(U, params.euler.eos, cfg)
-            row = [s.t, s.coupled.astype(s.t.dtype), jnp.sum(P.active).astype(s.t.dtype),
-                   jnp.sum(euler[:n]), jnp.sum(particles[:n]), structure, jnp.sum(reservoirs[:n]),
-                   jnp.sum(s.budget.boundary_out[:n]), mass_residual,
-                   euler[-1], particles[-1], reservoirs[-1], s.budget.boundary_out[-1], s.budget.pressure_transfer[-1],
-                   energy_residual, s.budget.mpm_step[-1], jnp.where(s.coupled, transport[-1] / scale[-1], 0.0)]
-            row += momentum_residuals + list(s.budget.reaction)
-            row += list(total[n:n + d])
-            nst = cs.n_structure
-            if nst:
-                on = P.active[:nst]  # (fragments that left the box no longer count)
-                disp = jnp.where(on, jnp.linalg.norm(P.x[:nst] - params.structure_x0, axis=1), 0.0)
-                row += [jnp.max(disp), jnp.max(jnp.where(on, P.point.damage[:nst], 0.0)),
-                        jnp.max(jnp.where(on, P.point.plastic_strain[:nst], 0.0))]
-            row += tracer_row(P, tracers, params.structure_x0[tracers], d)
-            flat = [prim["pressure"][gauges] - params.reference_pressure, prim["rho"][gauges]]
-            flat += [prim["velocity"][k][gauges] for k in range(d)]
-            return jnp.concatenate([jnp.stack(row), jnp.stack(flat, axis=1).reshape(-1)])
+            return history(static, s, params).values(s.t.dtype)
 
         return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
                                   stable_dt=stable_dt, step=step, history_row=history_row, pool_full=pool_full)
@@ -382,27 +346,7 @@ class Cfdmp:
         return jnp.where(s.coupled, cp.view(s.U, rows, gas_mass, lay), s.U)
 
     def history_columns(self, setup: problem.Setup, sc: CfdmpScenario) -> tuple:
-        nd = setup.euler.grid.ndim
-        full = nd == 3 or setup.grid.axisymmetric  # (r-z: the rings' whole content)
-        kg, J, mom = ("kg", "J", "kg*m/s") if full else (("kg/m", "J/m", "kg*m/s/m") if nd == 2 else
-                                                            ("kg/m^2", "J/m^2", "kg*m/s/m^2"))
-        cols = [("time", "s"), ("coupled", "1"), ("particles", "1"), ("mass_euler", kg), ("mass_gas_particles", kg),
-                ("mass_structures", kg), ("mass_reservoirs", kg), ("mass_boundary_out", kg),
-                ("mass_budget_residual", "1"), ("energy_euler", J), ("energy_particles", J),
-                ("energy_reservoirs", J), ("energy_boundary_out", J), ("energy_pressure_transfer", J),
-                ("energy_budget_residual", "1"), ("energy_mpm_step", J), ("energy_transport_residual", "1")]
-        for a in conserved_momentum_axes(GEOMETRY_CODE[setup.euler.grid.geometry], nd):
-            cols += [(f"momentum_{AXES[a]}_budget_residual", "1"), (f"momentum_{AXES[a]}_transport_residual", "1")]
-        cols += [(f"reaction_impulse_{a}", mom) for a in AXES[:nd]] + [("reaction_work", J)]
-        cols += [(f"momentum_{a}", mom) for a in AXES[:nd]]
-        if setup.info["structure_particles"]:
-            cols += [("structure_max_displacement", "m"), ("structure_max_damage", "1"),
-                     ("structure_max_plastic_strain", "1")]
-        cols += tracer_columns(len(setup.info["tracers"]), AXES[:nd])
-        for k in range(len(setup.euler.gauges)):
-            cols += [(f"gauge{k}_overpressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
-            cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:nd]]
-        return tuple(cols)
+        return history(self.static(setup, sc)).columns
 
     def snapshot(self, state: State, setup: problem.Setup) -> Coupled:
         """The viewed grid (Eulerian cells, and the box cells beyond the bridges from the particles; cells
@@ -435,7 +379,7 @@ class Cfdmp:
         P = state.mpm.particles
         on = np.asarray(P.active)
         stress = np.asarray(P.point.stress)[on]
-        nst = setup.info["structure_particles"]
+        nst = setup.coupling.structure_particles
         points = {"pressure": -stress[:, :3].sum(axis=1) / 3.0, "density": np.asarray(P.point.density)[on],
                   "velocity": np.asarray(P.v)[on, :g.ndim], "stress": stress[:, VOIGT_TO_TENSOR],
                   "plastic_strain": np.asarray(P.point.plastic_strain)[on], "damage": np.asarray(P.point.damage)[on],
@@ -453,18 +397,18 @@ class Cfdmp:
     @staticmethod
     def pool_needed(state: State, setup: problem.Setup) -> int:
         active = int(np.sum(np.asarray(state.mpm.particles.active)))
-        return max(int(state.budget.required), active + setup.info["pool_margin"])
+        return max(int(state.budget.required), active + setup.coupling.pool_margin)
 
     @staticmethod
     def grow(setup: problem.Setup, state: State, capacity: int):
         """One member's host state in a pool of ``capacity`` slots, the new ones empty at the end (the slots
         in use keep their indices); None when ``numerics.capacity`` fixed the pool."""
-        if not setup.info["capacity_grows"]:
+        if not setup.coupling.capacity_grows:
             return None
         P = state.mpm.particles
         pad = mpm.empty(capacity - setup.capacity, P.point.history.shape[1], P.mass.dtype)
         grown = jax.tree_util.tree_map(lambda a, b: np.concatenate([np.asarray(a), np.asarray(b)]), P, pad)
-        setup = dataclasses.replace(setup, capacity=int(capacity), info={**setup.info, "capacity": int(capacity)})
+        setup = dataclasses.replace(setup, capacity=int(capacity))
         return setup, state._replace(mpm=state.mpm._replace(particles=grown))
 
     def locate_fault(self, state: State, setup: problem.Setup) -> str:
@@ -509,10 +453,10 @@ class Cfdmp:
         conserved = [AXES[a] for a in conserved_momentum_axes(GEOMETRY_CODE[e.grid.geometry], nd)]
         baseline = np.asarray(state.baseline)
         out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
-               "dx": e.grid.dx, "bridge_cells": setup.info["bridge_cells"],
-               **({"remap_time": e.info["remap_time"], "one_d_air_zone": e.info["one_d_air_zone"]}
-                  if "remap_time" in e.info else {}),
-               "coupled_faces": setup.info["coupled_faces"],
+               "dx": e.grid.dx, "bridge_cells": setup.coupling.bridge_cells,
+               **({"remap_time": e.charge["remap_time"], "one_d_air_zone": e.charge["one_d_air_zone"]}
+                  if e.charge else {}),
+               "coupled_faces": list(setup.coupling.coupled_faces),
                "activation_time": float(hist["time"][np.argmax(coupled)]) if coupled.any() else None,
                "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,
                "budget": {
@@ -543,10 +487,10 @@ class Cfdmp:
                    "displaced_by_structures": {"mass": float(np.asarray(state.displaced)[:n].sum()),
                                                "energy": float(np.asarray(state.displaced)[-1])}},
                "gauges": gauges}
-        out.update(tracer_summary(hist, len(setup.info["tracers"]), AXES[:setup.euler.grid.ndim]))
-        if setup.info["structure_particles"]:
+        out.update(tracer_summary(hist, len(setup.coupling.tracers), AXES[:setup.euler.grid.ndim]))
+        if setup.coupling.structure_particles:
             P = state.mpm.particles
-            nst = setup.info["structure_particles"]
+            nst = setup.coupling.structure_particles
             on = np.asarray(P.active)[:nst]  # fragments that left the box are gone (mass_left_the_box)
             dmg = np.asarray(P.point.damage)[:nst][on]
             vol = np.asarray(P.mass)[:nst][on] / np.asarray(P.point.density)[:nst][on]
@@ -620,6 +564,92 @@ class Cfdmp:
 METHOD = register(Cfdmp())
 
 
+def history(static: Static, s: State | None = None, params: Params | None = None) -> timeloop.Row:
+    """The history row of state ``s``: the system's budget (mass, energy and momentum, with their residuals
+    against the totals at activation, 0 before it), the reactions, the structures' extremes, the tracers and
+    the gauges. Without a state only its columns (``.columns``) can be read."""
+    cs = static.coupling
+    cfg = cs.euler
+    nd, n = len(cfg.shape), cfg.n_materials
+    axes = AXES[:nd]
+    full = nd == 3 or cs.mpm.grid.axisymmetric  # (r-z: the rings' whole content)
+    kg, J, mom = ("kg", "J", "kg*m/s") if full else (("kg/m", "J/m", "kg*m/s/m") if nd == 2 else
+                                                        ("kg/m^2", "J/m^2", "kg*m/s/m^2"))
+
+    @functools.cache
+    def budget():  # totals, account against the baseline, residual scales (traced: only when s is given)
+        P = s.mpm.particles
+        total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, params.layout, cs)
+        account = (total + s.budget.boundary_out).at[n:].add(-s.budget.reaction)
+        scale = jnp.where(s.coupled, jnp.abs(s.baseline), 1.0)
+        # with the MPM steps' change and the face pressure transfer booked: the transport alone
+        transport = account[n:] - s.baseline[n:] - (s.budget.mpm_step - s.budget.pressure_transfer)
+        # momentum relative to sqrt(2 M E) at activation (the momentum the system's energy could carry)
+        p_scale = jnp.where(s.coupled, jnp.sqrt(2.0 * jnp.sum(scale[:n]) * scale[-1]), 1.0)
+        return dict(total=total, euler=euler, particles=particles, reservoirs=reservoirs, structure=structure,
+                    account=account, scale=scale, transport=transport, p_scale=p_scale)
+
+    def when_coupled(value):
+        return jnp.where(s.coupled, value, 0.0)
+
+    b = budget  # (short: read in every entry below)
+    row = timeloop.Row()
+    row.add("time", "s", lambda: s.t)
+    row.add("coupled", "1", lambda: s.coupled)
+    row.add("particles", "1", lambda: jnp.sum(s.mpm.particles.active))
+    row.add("mass_euler", kg, lambda: jnp.sum(b()["euler"][:n]))
+    row.add("mass_gas_particles", kg, lambda: jnp.sum(b()["particles"][:n]))
+    row.add("mass_structures", kg, lambda: b()["structure"])
+    row.add("mass_reservoirs", kg, lambda: jnp.sum(b()["reservoirs"][:n]))
+    row.add("mass_boundary_out", kg, lambda: jnp.sum(s.budget.boundary_out[:n]))
+    row.add("mass_budget_residual", "1", lambda: when_coupled(
+        (jnp.sum(b()["account"][:n]) - jnp.sum(s.baseline[:n])) / jnp.sum(b()["scale"][:n])))
+    row.add("energy_euler", J, lambda: b()["euler"][-1])
+    row.add("energy_particles", J, lambda: b()["particles"][-1])
+    row.add("energy_reservoirs", J, lambda: b()["reservoirs"][-1])
+    row.add("energy_boundary_out", J, lambda: s.budget.boundary_out[-1])
+    row.add("energy_pressure_transfer", J, lambda: s.budget.pressure_transfer[-1])
+    row.add("energy_budget_residual", "1", lambda: when_coupled((b()["account"][-1] - s.baseline[-1]) / b()["scale"][-1]))
+    row.add("energy_mpm_step", J, lambda: s.budget.mpm_step[-1])
+    row.add("energy_transport_residual", "1", lambda: when_coupled(b()["transport"][-1] / b()["scale"][-1]))
+    for a in conserved_momentum_axes(cfg.geometry, nd):
+        row.add(f"momentum_{AXES[a]}_budget_residual", "1", lambda a=a: when_coupled(
+            (b()["account"][n + a] - s.baseline[n + a]) / b()["p_scale"]))
+        row.add(f"momentum_{AXES[a]}_transport_residual", "1",
+                lambda a=a: when_coupled(b()["transport"][a] / b()["p_scale"]))
+    row.add_block([(f"reaction_impulse_{a}", mom) for a in axes] + [("reaction_work", J)], lambda: s.budget.reaction)
+    row.add_block([(f"momentum_{a}", mom) for a in axes], lambda: b()["total"][n:n + nd])
+    if cs.n_structure:
+        def on():  # (fragments that left the box no longer count)
+            return s.mpm.particles.active[:cs.n_structure]
+
+        def largest(values):
+            return jnp.max(jnp.where(on(), values[:cs.n_structure], 0.0))
+
+        P = None if s is None else s.mpm.particles
+        row.add("structure_max_displacement", "m",
+                lambda: largest(jnp.linalg.norm(P.x[:cs.n_structure] - params.structure_x0, axis=1)))
+        row.add("structure_max_damage", "1", lambda: largest(P.point.damage))
+        row.add("structure_max_plastic_strain", "1", lambda: largest(P.point.plastic_strain))
+    tracers = jnp.asarray(static.tracers, jnp.int32)  # (structure slots: never deleted or moved)
+    row.add_block(tracer_columns(len(static.tracers), axes),
+                  lambda: jnp.stack(tracer_row(s.mpm.particles, tracers, params.structure_x0[tracers], nd)))
+    if static.gauge_cells:
+        def gauge_values():
+            prim = cp.flat_primitives(Cfdmp._view(s, cs, params.layout), params.euler.eos, cfg)
+            g = jnp.asarray(static.gauge_cells, jnp.int32)
+            flat = [prim["pressure"][g] - params.reference_pressure, prim["rho"][g]]
+            flat += [prim["velocity"][k][g] for k in range(nd)]
+            return jnp.stack(flat, axis=1)
+
+        columns = []
+        for k in range(len(static.gauge_cells)):
+            columns += [(f"gauge{k}_overpressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
+            columns += [(f"gauge{k}_velocity_{a}", "m/s") for a in axes]
+        row.add_block(columns, gauge_values)
+    return row
+
+
 def _face_damage_plot(png, sc: CfdmpScenario, particles, cell_size: float) -> None:
     """plots/faces.png: the failure (damage 1) on the concrete's face toward the charge and the tensile damage
     on the opposite face, in the reference configuration (000 Fig. 14)."""
@@ -657,7 +687,7 @@ def _loaded_faces(sc: CfdmpScenario, setup: problem.Setup, state: State) -> list
     across symmetry planes through the charge's axis."""
     if sc.initial.kind != "charge":
         return []
-    nd, nst = setup.euler.grid.ndim, setup.info["structure_particles"]
+    nd, nst = setup.euler.grid.ndim, setup.coupling.structure_particles
     axis = nd - 1
     center = np.asarray(sc.initial.center, float)
     P = state.mpm.particles

@@ -20,7 +20,7 @@ the coupling layout (cell indices in the Eulerian grid, C order):
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -59,6 +59,29 @@ class Face:
 
 
 @dataclass(frozen=True)
+class Coupling:
+    """What the coupled step reads of the scenario besides the geometry, typed; each value is checked once,
+    by the scenario model (``numerics``, ``mpm_region``) or by :func:`build`."""
+
+    structure_particles: int  # the structures' particles: the first slots of the pool, never deleted
+    gas_particles_per_cell: int  # per axis, in the box's gas lattice (mpm_region.gas_particles_per_cell)
+    bridge_cells: int  # width of the bridge region in cells (mpm_region.bridge_cells)
+    shape_functions: str  # numerics.shape ("linear" or "gimp")
+    clamped: bool  # some structure has supports (prescribed-velocity particles)
+    pic_fraction: tuple  # per MPM material: numerics.gas_pic_fraction for the gases, 0 for the structures
+    pressure_relaxation: bool  # numerics.pressure_relaxation (mixed gas particles relaxed to one pressure)
+    mpm_cfl: float  # numerics.cfl of the MPM step
+    q_quadratic: float  # numerics.q_quadratic, artificial bulk viscosity of the particles
+    q_linear: float  # numerics.q_linear
+    mpm_reference_pressure: float  # numerics.reference_pressure [Pa]
+    activation_overpressure: float  # mpm_region.activation_overpressure [Pa]: starts the coupling (0: at once)
+    capacity_grows: bool  # the pool grows when full (numerics.capacity not set and some face coupled)
+    pool_margin: int  # a growing pool is full when fewer slots are free than one step can fill
+    tracers: tuple  # structure particle of each output.tracers point
+    coupled_faces: tuple  # "lower x", "upper y", ... the box faces coupled to the Eulerian grid
+
+
+@dataclass(frozen=True)
 class Setup:
     euler: euler_problem.Setup
     grid: mpm.Grid  # MPM background grid
@@ -87,7 +110,7 @@ class Setup:
     boundary_measure: tuple  # per axis (lower, upper): face measures over that domain face where the cell inside
     #                          is Eulerian-only, else 0 (their transfers are the run's boundary exchange)
     outflow_area: np.ndarray  # (num_nodes, ndim) -n A on MPM nodes of box faces on outflow domain faces
-    info: dict = field(default_factory=dict)
+    coupling: Coupling
 
     @property
     def cells(self) -> int:
@@ -353,19 +376,17 @@ def build(sc: CfdmpScenario) -> Setup:
             outflow_area[tuple(sl) + (ax,)] = -sign * area
     outflow_area = outflow_area.reshape(grid.num_nodes, nd)
 
-    info = dict(esetup.info)
-    info.update(mpm_cells=list(grid.cells), mpm_origin=list(grid.origin), box_cells=[list(lo), list(hi)],
-                bridge_cells=w, coupled_faces=[f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
-                                               for f in faces],
-                structure_particles=n_struct, gas_particles=int(gvol.size), capacity=int(capacity),
-                capacity_grows=grows, pool_margin=pool_margin,
-                mpm_materials=list(names), activation_overpressure=box.activation_overpressure,
-                gas_particles_per_cell=ppc, shape_functions=sc.numerics.shape, mpm_cfl=sc.numerics.cfl,
-                q=[sc.numerics.q_quadratic, sc.numerics.q_linear],
-                pic_fraction=[sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))],
-                pressure_relaxation=sc.numerics.pressure_relaxation, tracers=list(tracers), clamped=bool(clamped),
-                mpm_reference_pressure=sc.numerics.reference_pressure)
+    coupling = Coupling(
+        structure_particles=n_struct, gas_particles_per_cell=ppc, bridge_cells=w, shape_functions=sc.numerics.shape,
+        clamped=bool(clamped),
+        pic_fraction=tuple(sc.numerics.gas_pic_fraction if k in gas_material else 0.0 for k in range(len(models))),
+        pressure_relaxation=sc.numerics.pressure_relaxation, mpm_cfl=sc.numerics.cfl,
+        q_quadratic=sc.numerics.q_quadratic, q_linear=sc.numerics.q_linear,
+        mpm_reference_pressure=sc.numerics.reference_pressure,
+        activation_overpressure=box.activation_overpressure, capacity_grows=grows, pool_margin=pool_margin,
+        tracers=tuple(tracers), coupled_faces=tuple(f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
+                                                    for f in faces))
     return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
                  int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, ring_volume, ring_half,
                  cell_volume,
-                 gx, gvol, ghalf, gcell, tuple(boundary_measure), outflow_area, info)
+                 gx, gvol, ghalf, gcell, tuple(boundary_measure), outflow_area, coupling)

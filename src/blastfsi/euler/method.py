@@ -110,10 +110,10 @@ class Euler:
         return Static(self._cfg(setup, sc), flat)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
-        return Params(kernels.Params(jnp.asarray(setup.eos, dtype), jnp.asarray(setup.info["cfl"], dtype),
+        return Params(kernels.Params(jnp.asarray(setup.eos, dtype), jnp.asarray(setup.cfl, dtype),
                                      problem.blast_params(setup, dtype)),
                       jnp.asarray(setup.reference_pressure, dtype),
-                      jnp.asarray(setup.info["arrival_fraction"] * setup.reference_pressure, dtype))
+                      jnp.asarray(setup.arrival_fraction * setup.reference_pressure, dtype))
 
     def initial_state(self, setup: problem.Setup, sc: EulerScenario, n_samples: int, dtype) -> State:
         static = self.static(setup, sc)
@@ -124,7 +124,7 @@ class Euler:
         maps = blast_maps.initial(_pressure(U, params, static.cfg) - params.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
         clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
-        clock["t"] = jnp.asarray(setup.info.get("remap_time", 0.0), dtype)
+        clock["t"] = jnp.asarray(setup.charge.get("remap_time", 0.0), dtype)
         return State(U, *maps, **clock)
 
     def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
@@ -224,8 +224,8 @@ class Euler:
                 "arrival_time": arrival if np.isfinite(arrival) else None,
                 "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None,
             })
-        if "charge_mass" in setup.info and gauges:
-            info = setup.info
+        if setup.charge and gauges:
+            info = setup.charge
             if info["kb_burst"] is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
                 r = kb_compare.distances(setup.gauges, info["charge_center"])
                 refs = kb_compare.scenario_references(sc, info, float(setup.grid.dx))  # by position, or set
@@ -244,10 +244,10 @@ class Euler:
 
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
-            if sc.initial.kind == "charge" and setups[0].info["kb_burst"] is not None:
+            if sc.initial.kind == "charge" and setups[0].charge["kb_burst"] is not None:
                 from blastfsi.plotting.kb import kb_gauge_histories
 
-                info = setups[0].info
+                info = setups[0].charge
                 kb_gauge_histories(folder / "gauges_kb.png", histories[0], sc.output.gauges, info["charge_mass"],
                                    info["kb_burst"], centre=info["charge_center"],
                                    references=scenario_references(sc, info, float(setups[0].grid.dx)))

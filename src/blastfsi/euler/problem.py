@@ -58,7 +58,10 @@ class Setup:
     reference_pressure: float
     gauges: np.ndarray  # (G, ndim) positions
     gauge_cells: tuple[tuple[int, ...], ...]
-    info: dict = field(default_factory=dict)
+    cfl: float  # numerics.cfl
+    arrival_fraction: float  # output.arrival_fraction: the overpressure that marks arrival, of the ambient pressure
+    charge: dict = field(default_factory=dict)  # a charge's 1D detonation and remap (ChargeInitial.info), JSON;
+    #                                             empty for other initial kinds
     blast: dict | None = None  # the blast table of a stand-off charge (blastfsi.detonation.charge.blast_table)
 
     @property
@@ -140,10 +143,8 @@ def build(sc: EulerScenario) -> Setup:
     if init.kind == "charge":
         c = charge_initial(sc, g)
         gauges, gauge_cells = _gauges(sc, g)
-        info = {"materials": list(c.materials), "dx": g.dx, "shape": list(g.shape), "geometry": g.geometry,
-                "cfl": sc.numerics.cfl, "arrival_fraction": sc.output.arrival_fraction, **c.info}
         return Setup(g, c.materials, c.eos, bc, c.rho_k, c.alpha, c.velocity, c.pressure, c.reference_pressure,
-                     gauges, gauge_cells, info, c.blast)
+                     gauges, gauge_cells, sc.numerics.cfl, sc.output.arrival_fraction, c.info, c.blast)
     ndim = g.ndim
     mesh = g.mesh()
     if init.kind == "riemann":
@@ -188,9 +189,8 @@ def build(sc: EulerScenario) -> Setup:
         pressure = pressure + _point_energy_pressure(sc, g, centre, mats[amb.material])
     eos = np.array([list(mats[m].eos_params()) for m in materials], float)
     gauges, gauge_cells = _gauges(sc, g)
-    info = {"materials": list(materials), "dx": g.dx, "shape": list(shape), "geometry": g.geometry,
-            "cfl": sc.numerics.cfl, "arrival_fraction": sc.output.arrival_fraction}
-    return Setup(g, materials, eos, bc, rho_k, alpha, velocity, pressure, float(p_ref), gauges, gauge_cells, info)
+    return Setup(g, materials, eos, bc, rho_k, alpha, velocity, pressure, float(p_ref), gauges, gauge_cells,
+                 sc.numerics.cfl, sc.output.arrival_fraction)
 
 
 def cell_volumes(g: GridGeometry) -> np.ndarray:

@@ -118,10 +118,9 @@ class MPM:
                                       prescribed=setup.prescribed, relax=relax), setup.tracers)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
-        sc = setup.info["numerics"]
-        prm = mpm.make_params(setup.model_params, cfl=sc["cfl"], q_quadratic=sc["q_quadratic"],
-                              q_linear=sc["q_linear"], gravity=tuple(setup.info["gravity"]),
-                              reference_pressure=sc["reference_pressure"], dtype=dtype)
+        prm = mpm.make_params(setup.model_params, cfl=setup.cfl, q_quadratic=setup.q_quadratic,
+                              q_linear=setup.q_linear, gravity=setup.gravity,
+                              reference_pressure=setup.reference_pressure, dtype=dtype)
         x0 = np.asarray(setup.particles.x)[list(setup.tracers)].reshape(-1, 3)
         return Params(_cast(prm, dtype), jnp.asarray(x0, dtype), jnp.asarray(_pad3(setup.gauges), dtype))
 
@@ -224,13 +223,13 @@ class MPM:
         axes = ("r", "z") if setup.grid.axisymmetric else AXES[:d]
         out = {"particles": int(on.sum()), "capacity": int(on.size), "shape": sc.numerics.shape,
                "cell_size": setup.grid.cell_size, "grid_cells": list(setup.grid.cells),
-               "materials": list(setup.materials), "bodies": setup.info["bodies"],
+               "materials": list(setup.materials), "bodies": list(setup.bodies),
                "mass": float(hist["mass"][-1]), "mass_change_relative": float(hist["mass"][-1] / hist["mass"][0] - 1.0),
                "kinetic_energy": float(kinetic[-1]), "internal_energy": float(internal[-1]),
                "plastic_work": float(hist["plastic_work"][-1]), "external_work": float(hist["external_work"][-1]),
                # a driven (prescribed, impactor) body does work that external_work does not count; a clamp does
                # none in the continuum (its grid nodes are at rest), so a clamped body's balance is reported
-               "energy_balance_relative": None if setup.info["driven"] else float(balance[-1] / scale),
+               "energy_balance_relative": None if setup.driven else float(balance[-1] / scale),
                # the same less the reactions' work (grid faces and prescribed particles on the nodes): also for
                # a driven body, whose driver's work is that of its nodes' reactions
                "energy_balance_with_reactions_relative": float((balance[-1] - hist["reaction_work"][-1]) / scale),
@@ -242,8 +241,8 @@ class MPM:
                "max_damage": float(np.max(np.asarray(P.point.damage)[on])),
                "failed_particles": int(np.sum(np.asarray(P.point.damage)[on] >= 1.0))}
         out.update(tracer_summary(hist, len(setup.tracers), axes))
-        if "period_theory" in setup.info:
-            out["period_theory"] = setup.info["period_theory"]
+        if setup.period_theory is not None:
+            out["period_theory"] = setup.period_theory
             out["period"] = (zero_crossing_period(hist["time"], hist[f"tracer0_displacement_{axes[0]}"])
                              if setup.tracers else None)
         if sc.impactor is not None:

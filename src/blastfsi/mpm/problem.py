@@ -9,7 +9,7 @@ library's reference density.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -37,7 +37,14 @@ class Setup:
     tracers: tuple[int, ...]  # particle index of each tracer
     gauges: np.ndarray  # (G, ndim) gauge points [m]
     prescribed: bool
-    info: dict = field(default_factory=dict)
+    cfl: float  # numerics.cfl
+    q_quadratic: float  # numerics.q_quadratic (artificial bulk viscosity)
+    q_linear: float  # numerics.q_linear
+    reference_pressure: float  # numerics.reference_pressure [Pa]
+    gravity: tuple  # (ndim,) body force per unit mass [m/s^2]
+    driven: bool  # some body moves with a prescribed velocity (its work is not booked: no energy balance)
+    bodies: tuple  # per body (the impactor last): material, particles, mass, wave speed (JSON, for the summary)
+    period_theory: float | None = None  # first-mode period of a fixed-free bar with a sine velocity profile [s]
 
     @property
     def cells(self) -> int:
@@ -268,17 +275,15 @@ def build(sc: MPMScenario) -> Setup:
     mass = np.asarray(pool.mass)[:n]
     speeds = np.asarray(mpm.initialize(pool, mpm.make_params(params), mpm.make_config(grid, models))
                         .particles.wave_speed)[:n]
-    info = {"cell_size": grid.cell_size, "grid_cells": list(grid.cells), "materials": names,
-            "models": [m.name for m in models], "shape": sc.numerics.shape,
-            "numerics": {k: getattr(sc.numerics, k) for k in ("cfl", "q_quadratic", "q_linear", "reference_pressure")},
-            "gravity": list(sc.gravity) or [0.0] * d,
-            "driven": any(b.prescribed for b in sc.bodies),
-            "bodies": [{"material": (sc.bodies[k].material if k < len(sc.bodies) else imp.material),
-                        "particles": int(np.sum(body == k)), "mass": float(np.sum(mass[body == k])),
-                        "wave_speed": float(np.max(speeds[body == k]))}
-                       for k in range(len(sc.bodies) + (imp is not None))]}
+    bodies = tuple({"material": (sc.bodies[k].material if k < len(sc.bodies) else imp.material),
+                    "particles": int(np.sum(body == k)), "mass": float(np.sum(mass[body == k])),
+                    "wave_speed": float(np.max(speeds[body == k]))}
+                   for k in range(len(sc.bodies) + (imp is not None)))
     sine = [k for k, b in enumerate(sc.bodies) if b.velocity_profile == "sine"]
-    if sine:  # fixed-free bar, first mode: T = 4 L / c (c the longitudinal wave speed)
-        info["period_theory"] = 4.0 * extents[sine[0]] / info["bodies"][sine[0]]["wave_speed"]
+    # fixed-free bar, first mode: T = 4 L / c (c the longitudinal wave speed)
+    period = 4.0 * extents[sine[0]] / bodies[sine[0]]["wave_speed"] if sine else None
+    n = sc.numerics
     return Setup(grid, tuple(names), models, tuple(params), pool, body, spacing, tuple(tracers), gauges,
-                 any(b.prescribed or b.supports for b in sc.bodies), info)
+                 any(b.prescribed or b.supports for b in sc.bodies), n.cfl, n.q_quadratic, n.q_linear,
+                 n.reference_pressure, tuple(sc.gravity) or (0.0,) * d, any(b.prescribed for b in sc.bodies),
+                 bodies, period)
