@@ -254,6 +254,7 @@ def test_bad_input_is_named():
     fails("output.tracers\\[0\\]", structures=[far], output={"tracers": [[0.6]]})
 
 
+@pytest.mark.slow  # (the default suite's time: ~1 min / ~25 s)
 def test_clamped_plate_deflects_and_its_supports_hold():
     """The shock of a 200 bar air driver hits a 10 mm steel plate across a 2D channel, clamped over 10 mm at
     both walls ([[structures.supports]]); tracers at its centre and in a clamp (output.tracers). The clamped
@@ -431,6 +432,7 @@ def test_uniform_flow_leaves_through_a_flow_out_box_face(speed):
     assert max(abs(b["energy_residual_relative"]), abs(b["momentum_x_residual_relative"])) < 1e-12
 
 
+@pytest.mark.slow  # (the default suite's time: ~1 min / ~25 s)
 def test_gas_at_rest_stays_at_rest_on_outflow_box_faces():
     """A 2D box whose faces lie on outflow faces of the domain (the he-slab-2d layout): the mirror gas of
     ``outflow_ghost`` (mass, momentum and traction on those faces' nodes) balances the particles' stress.

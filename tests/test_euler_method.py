@@ -29,6 +29,7 @@ def test_slope_limiters_point_values():
         np.testing.assert_allclose(np.asarray(limited_slope(lo, hi, 1e-300, limiter)), values, rtol=1e-15)
 
 
+@pytest.mark.slow  # (the default suite's time: ~25 s)
 def test_slope_limiters_order_the_sod_error():
     """numerics.limiter of hllc-muscl, Sod at 200 cells: every limiter stays within the smearing bound of
     the next test, and the error follows the limiters' compressiveness, MC < van Leer < minmod (the
