@@ -227,8 +227,10 @@ def next_chunk(steps: int, seconds: float, cap: int) -> int:
     return int(max(1, min(aim, 4 * steps, cap)))
 
 
-GROWTH = 1.25  # a full particle pool grows to GROWTH x (the particles it needed), in whole thousands
-#                (he-slab-2d to 32.5 us: one growth either way; loop 45.7 s with 1.25 (38 000 slots), 50.2 s with 1.5)
+GROWTH = 1.25  # a full particle pool grows to GROWTH x (the particles it needed), in whole thousands: a growth
+#                costs a recompilation and every step costs in proportion to the pool, so geometric growth keeps
+#                the growths logarithmic in the need and the empty slots below 25 % (no effect on results;
+#                docs/theory/cfdmp.md, "Departures from the paper and tuned constants")
 
 
 def _pool_size(method: methods.Method, state) -> int:

@@ -75,11 +75,16 @@ from blastfsi.euler.mixture import cell_state, cold_terms, eos_rows
 from blastfsi.mpm.musl import wave_speed
 from blastfsi.xla import row_sum
 
-INFLOW_MACH = 0.01  # inflow Mach number over which a flow-out face's mirror gas is gone (outflow_ghost)
+# Tuned constants of the coupling: the CFDMP paper states none of them. Derivations and measured sensitivities:
+# docs/theory/cfdmp.md, "Departures from the paper and tuned constants".
+INFLOW_MACH = 0.01  # inflow Mach number over which a flow-out face's mirror gas is gone (outflow_ghost): a ramp
+#                     narrow against c, so rest and outflow (up to velocity noise) keep the whole mirror
 FULL_FILL = 0.5  # share of a flow-out face node's half support filled with gas from which its mirror traction
-#                  is whole (outflow_ghost)
-FEED_FRACTION = 1e-6  # smallest reservoir mass that feeds an inflow particle, in gas particles of the bridge cell
-PRESENT = 1e-3  # smallest mass fraction of a material in the bridge cell whose phase density is trusted for it
+#                  is whole (outflow_ghost): a gas that fills space (phi ~ 1) keeps it, a lone particle does not
+FEED_FRACTION = 1e-6  # smallest reservoir mass that feeds an inflow particle, in gas particles of the bridge cell:
+#                       far above round-off traces, far below a particle; what waits stays booked
+PRESENT = 1e-3  # smallest mass fraction of a material in the bridge cell whose phase density is trusted for it:
+#                 below it the mixture's state stands in, misplacing at most that share of the cell's mass
 
 
 class Layout(NamedTuple):
@@ -274,33 +279,26 @@ def outflow_ghost(P: mpm.Particles, layout: Layout, static: Static, reference, s
     and a gas at rest in such a box ran away (tests/test_cfdmp.py).
 
     Volume, not mass, weights the pressure: the traction stands for the outside continuation of the
-    particles' own pressure force on the node, sum_p V_p p_p dN_I/dn, a volume integral. With mass weights a
-    compressed, hot particle (air at 11.5 kg/m^3 and 1.6 GPa, 3 % of a cell's volume, the mass of its
-    rarefied neighbours) set the traction of a face node holding 1.4e-6 kg/m in he-slab-2d behind the slab
-    at 28.8 us: one step kicked that node by 44 km/s; the kicked particles, stopped by q, heated up to 7e8
-    J/kg and the run stopped at 30.8 us (time step collapsed). With volume weights the largest |v| + c of
-    the gas at the run's checkpoints (every 2.5 us) is 12.1 km/s from 25 us to 32.5 us (mass weights: 16.6
-    km/s at 27.5 us, 87.5 km/s at 30 us); a uniform state gets the same traction either way.
+    particles' own pressure force on the node, sum_p V_p p_p dN_I/dn, a volume integral. Mass weights let a
+    small, compressed, hot particle set the traction of a rarefied node it barely fills; a uniform state
+    gets the same traction either way.
 
     The mirror models outflow and rest only: no gas enters the box through such a face (no particles are
-    created there), so where the node's gas flows in, the mirror's traction pushed ever fewer particles
-    without bringing mass: in he-slab-2d the air drawn back into the box behind the slab's edge reached
-    c = 142 km/s and |v| = 39 km/s by 30 us and cut the MPM step to 4 ns (the same run from 25 us with no
-    mirror on inflow nodes: below 16 km/s, steps of ~50 ns). The mirror is therefore scaled by
-    clip(1 + u_n / (INFLOW_MACH c), 0, 1), u_n the node's outward velocity and c its mass-weighted sound
-    speed: whole for outflow and rest, gone for inflow faster than INFLOW_MACH c (the node is then a free
-    face), linear between (no switching). ``reference``: the MPM step's reference pressure (the traction
-    is that of p_I - p_ref, as the particles' force). ``stencil``: the particles' (idx, w) when the caller
+    created there), so where the node's gas flows in, the mirror's traction would push ever fewer particles
+    without bringing mass and the rarefied gas behind a structure's edge would run away. The mirror is
+    therefore scaled by clip(1 + u_n / (INFLOW_MACH c), 0, 1), u_n the node's outward velocity and c its
+    mass-weighted sound speed: whole for outflow and rest, gone for inflow faster than INFLOW_MACH c (the node
+    is then a free face), linear between (no switching; docs/theory/cfdmp.md, "Departures from the paper").
+    ``reference``: the MPM step's reference pressure (the traction is that of p_I - p_ref, as the particles'
+    force). ``stencil``: the particles' (idx, w) when the caller
     has them (the MUSL step's own, see mpm.musl.step).
 
     The traction p_I A stands for gas that fills the node's support. Particles whose volumes leave most of
     it empty (a lone products particle at the edge of the cloud, compressed) push the node with sum_p V_p
     p_p dN_I/dn only, a fraction phi_I = sum_p N_Ip V_p / (A h / 2) of p_I A: the mirror continues that, so
     the traction is scaled by clip(phi_I / FULL_FILL, 0, 1) (whole for a node at least half full: a gas
-    that fills space, however it moves, keeps the exact balance of a uniform state). *Found*: in
-    steel-plate-blast with a smaller PIC share for the slow gas (docs/theory/cfdmp.md) a products particle alone
-    by the flow-out face r = 0.3 m (phi ~ 0.02) was kicked back and forth by the whole traction of its own
-    pressure and heated by its compression from 8e7 to 2e10 J/kg in 120 steps until the run stopped."""
+    that fills space, however it moves, keeps the exact balance of a uniform state; a lone particle with
+    phi_I << 1 is no longer pushed by the whole traction of its own pressure)."""
     cfg = static.mpm
     d = cfg.grid.dim
     zero = jnp.zeros_like(layout.outflow_area)
@@ -398,9 +396,8 @@ def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, volume):
     """Add per-entry content (mass per material (n, E), momentum (d, E), energy (E,), phase volume (n, E)) to the
     Eulerian cells ``cells`` (E,) (000 Eqs. 49-51) of volumes ``volume`` (N,); the products fraction becomes the
     volume-weighted mean of the cell's and the added gas (a scatter, entries may share a cell), each phase's
-    volume floored at zero: renormalising a debt's removal (total volume below V) multiplied a products trace's
-    round-off-level negative fraction (-1e-7 in a near-vacuum cell under the box face of steel-plate-blast with
-    an ambient reference pressure) by up to 2 every step, to -3.5 in 30 steps and the run stopped."""
+    volume floored at zero: renormalising a debt's removal (total volume below V) would multiply a products
+    trace's round-off-level negative fraction by up to 2 every step, without bound."""
     flat = U.reshape(U.shape[0], -1)
     n, d = lay.n, lay.ndim
     V = volume[cells]
@@ -444,6 +441,7 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Stati
 
 
 SETTLE_FRACTIONS = (1.0, 0.5, 0.25, 0.125)  # shares of an outflow reservoir's balance tried, largest first
+#                                             (halvings; docs/theory/cfdmp.md, "Departures from the paper")
 
 
 def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout):
@@ -453,10 +451,11 @@ def _settle(U, res: Reservoirs, outflow, rho_k, lay, layout: Layout):
 
     Particles cross a face one at a time, each carrying ~1/ppc^ndim of a bridge cell's mass, while the scheme
     transfers a little every step: settling each step's debt at once (before the particle that repays it has
-    crossed) can take more than the cell holds when a shock leaves the box (a shock of 500:1 into the
-    Eulerian region emptied the first cell past the face). So a cell takes the largest share in
-    SETTLE_FRACTIONS that leaves it at least half of its density and of its internal energy density; the rest
-    waits in the reservoir for the next particles. Mass, momentum and energy move together (budget exact)."""
+    crossed) can take more than the cell holds when a strong shock leaves the box. So a cell takes the largest
+    share in SETTLE_FRACTIONS (halvings: each refusal halves the step's share, down to 1/8) that leaves it at
+    least half of its density and of its internal energy density; the rest waits in the reservoir for the next
+    particles. Mass, momentum and energy move together (budget exact). docs/theory/cfdmp.md, "Departures from
+    the paper"."""
     flat = U.reshape(U.shape[0], -1)
     n, d = lay.n, lay.ndim
     cells = layout.face_out
@@ -498,9 +497,8 @@ def _two_phase_split(moved_m, partial, alpha, V, rho_donor):
     A reservoir's balance per material is the difference between the scheme's transfer (with the bridge
     cell's composition) and the content of the particles deleted so far: where the two disagree (a mixing
     layer leaving the box), one material's balance is a debt larger than what the cell beyond the face still
-    holds of it. Taken as it stood it drove that cell's partial density and products fraction below zero
-    (steel-plate-blast with pure FLIP gas: alpha = -0.001 under the box face for ~15 steps, then c^2 < 0 in
-    that cell and the run stopped at 0.208 ms, docs/theory/cfdmp.md). So a debt takes at most half of the cell's
+    holds of it. Taken as it stood it can drive that cell's partial density and products fraction below zero
+    (then c^2 < 0 in that cell). So a debt takes at most half of the cell's
     partial density of its material, and the rest of it is taken from the other material: the settled
     total mass, momentum and energy are unchanged (the budget books the materials' sum); only the split
     between products and air moves, by at most the scheme's composition mismatch.
@@ -603,11 +601,10 @@ def cut_at_coupled_faces(x, half, lo, hi, static: Static):
 def cut_at_outflow_faces(x, half, lo, hi, static: Static):
     """Particles straddling a box face that lies on an outflow face of the domain, cut at it (:func:`_cut`):
     per particle (share of it beyond the face, centre and half-size of the part inside). The share beyond
-    leaves the run. *Found* (2026-12-04): with particles leaving whole once their centre crossed, such a
-    face held back a uniform outflow: a particle half beyond the face no longer pushed the face nodes with
-    its outer half while the mirror's traction (:func:`outflow_ghost`) still pushed them back with the whole
-    pressure, so air at 100 m/s (Mach 0.29) stagnated at the face (+42 % pressure in 2D, +30 % in 1D:
-    nearly a wall's reflection)."""
+    leaves the run. Particles leaving whole once their centre crossed would hold back a uniform outflow: a
+    particle half beyond the face no longer pushes the face nodes with its outer half while the mirror's
+    traction (:func:`outflow_ghost`) still pushes them back with the whole pressure, so the outflow would
+    stagnate at the face, nearly as at a wall."""
     share = jnp.zeros(x.shape[:1], x.dtype)
     for axis, side in static.outflow_faces:
         phi, centre, l_in = _cut(x, half, lo, hi, axis, side, static.mpm.grid.axisymmetric)

@@ -88,8 +88,7 @@ _conservative = jax.jit(ek.conservative, static_argnums=5)  # compiled once: par
 @functools.partial(jax.jit, static_argnums=2)
 def _viewed_primitives(st: State, prm: Params, cs: cp.Static):
     """(primitives of the viewed grid, cells without gas, positive-phase duration) for a snapshot: one
-    compiled function, not some hundred operations each compiled on first use (83 compilations, 5.6 s, in
-    the two snapshots of a short he-slab-2d-mpm run on the 2-core CPU)."""
+    compiled function, not some hundred operations each compiled on first use."""
     rows, gas_mass = cp.gas_rows(st.mpm.particles, cs)
     U = jnp.where(st.coupled, cp.view(st.U, rows, gas_mass, prm.layout), st.U)
     return (ek.primitives(U, prm.euler, cs.euler), st.coupled & prm.layout.fictitious & ~(gas_mass > 0.0),

@@ -326,7 +326,7 @@ def build(sc: CfdmpScenario) -> Setup:
     # of the cell (ppc x ppc points of 2 pi r s^2), the quadrature of the box's particles: with one point per cell
     # the axial force of the cell's pressure, 2 pi int r N_r dr dN_z/dz, is integrated with another error
     # (r_c int N_r dr) than on the particles' side of the face, and where a ring column meets a particle column
-    # (the box's corners) a gas at rest was pushed (velocity 5e-11 m/s after 20 steps, 0.7 m/s after 200 us)
+    # (the box's corners) a gas at rest would be pushed
     ring_cells = np.flatnonzero(ring)
     ring_x = np.zeros((ring_cells.size, 3))
     for ax, i in enumerate(np.unravel_index(ring_cells, shape)):

@@ -44,9 +44,9 @@ class MPMRegion(Strict):
 
 
 # PIC share of the gas particles' velocity update. Pure FLIP lets the velocity modes the grid cannot see grow in
-# the rarefied gas that wraps around a structure's edges: in he-slab-2d the air behind the slab reached 89 km/s
-# by 25 us (alpha = 0) and 1.5e5 m/s (alpha = 0.01), while alpha = 0.05 kept it below 16 km/s to 32.5 us
-# (continued from the same 20 us checkpoint); on cfdmp-shock-tube it changes the L1 error by -9 % at 1.2 ms.
+# the rarefied gas that wraps around a structure's edges; a PIC share alpha damps them by 1 - alpha a step
+# (e-folding in 1/alpha = 20 steps) and returns the kinetic energy it removes as heat. Not in the CFDMP paper:
+# docs/theory/cfdmp.md, "Departures from the paper and tuned constants".
 GAS_PIC_FRACTION = 0.05
 
 
@@ -74,7 +74,7 @@ class CfdmpNumerics(MPMNumerics):
     pool_headroom: float = Field(1.5, ge=1.0, le=20.0, description=(
         "default pool (numerics.capacity unset) with coupled faces: room for the structures, pool_headroom x "
         "the box's gas particles and one step's emissions. The bridge fills the box as the blast compresses its "
-        "gas (he-slab-2d: 1.29 x at 22 us, he-slab-3d: 1.21 x at its 20 us end); a full pool is enlarged and "
+        "gas (by about 1.2-1.3 x in the shipped slab examples); a full pool is enlarged and "
         "the time loop compiled again (summary pool_growths), and every step costs in proportion to the pool"))
 
 
