@@ -74,8 +74,8 @@ def _cfdmp_box(geometry):
             "time": {"end": 1.8e-3}, "output": {"history_samples": 3, "fields": 0, "plots": False}}
 
 
-@pytest.mark.parametrize("geometry", ["2d", pytest.param("3d", marks=pytest.mark.slow)])
-def test_gas_at_rest_stays_at_rest_in_a_cfdmp_box(geometry):
+@pytest.mark.parametrize("geometry", [pytest.param(g, marks=pytest.mark.slow) for g in ("2d", "3d")])
+def test_gas_at_rest_stays_at_rest_in_a_cfdmp_box(geometry):  # (slow: tests/test_cfdmp.py's gas at rest stays)
     """Air at 1 bar in a cfdmp box (absolute stresses, GIMP, the default gas PIC share), ~3000 steps. With the
     particles' own GIMP gradient this 2D layout reached 9.7 m/s and a 3 % pressure error after 3092 steps.
     Round-off bound as above (measured 4.3e-11 m/s after 18 787 steps, 2D)."""
