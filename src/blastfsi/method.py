@@ -2,7 +2,9 @@
 
 A method (``lagrangian1d``, ``euler``, ``mpm``, ``cfdmp``) is a package
 ``blastfsi.<name>`` whose module ``blastfsi.<name>.method`` builds an object
-with the :class:`Method` face and calls :func:`register` on it. The driver
+with the :class:`Method` face (a :class:`Solver`: build and step; and a :class:`Reporter`: history columns,
+snapshots, summary, fault location, plots; optionally a :class:`GrowingPool`) and calls :func:`register` on
+it. The driver
 (:mod:`blastfsi.simulation`), the schema (:mod:`blastfsi.scenario`) and the
 Python API import nothing else of a method; :func:`get` imports
 ``blastfsi.<name>.method`` the first time the name is asked for.
@@ -17,7 +19,8 @@ one method, advanced together by ``jit(vmap(advance))``):
 3. ``advance(state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction)``
    in compiled chunks, written with :func:`blastfsi.timeloop.run_until`;
 4. on the host between chunks and at the end, per member (arrays without the
-   ensemble axis): ``snapshot``, ``locate_fault`` (after a fault), ``summary``.
+   ensemble axis): ``snapshot``, ``locate_fault`` (after a fault), ``summary``; a full pool of a
+   :class:`GrowingPool` is enlarged (``pool_needed``, ``grow``) and the loop compiled again.
 """
 from __future__ import annotations
 
