@@ -576,7 +576,7 @@ def history(static: Static, s: State | None = None, params: Params | None = None
                                                         ("kg/m^2", "J/m^2", "kg*m/s/m^2"))
 
     @functools.cache
-    def budget():  # totals, account against the baseline, residual scales (traced: only when s is given)
+    def sums():  # totals, account against the baseline, residual scales (traced: only when s is given)
         P = s.mpm.particles
         total, euler, particles, reservoirs, structure = system_totals(s.U, P, s.reservoirs, params.layout, cs)
         account = (total + s.budget.boundary_out).at[n:].add(-s.budget.reaction)
@@ -591,33 +591,33 @@ def history(static: Static, s: State | None = None, params: Params | None = None
     def when_coupled(value):
         return jnp.where(s.coupled, value, 0.0)
 
-    b = budget  # (short: read in every entry below)
     row = timeloop.Row()
     row.add("time", "s", lambda: s.t)
     row.add("coupled", "1", lambda: s.coupled)
     row.add("particles", "1", lambda: jnp.sum(s.mpm.particles.active))
-    row.add("mass_euler", kg, lambda: jnp.sum(b()["euler"][:n]))
-    row.add("mass_gas_particles", kg, lambda: jnp.sum(b()["particles"][:n]))
-    row.add("mass_structures", kg, lambda: b()["structure"])
-    row.add("mass_reservoirs", kg, lambda: jnp.sum(b()["reservoirs"][:n]))
+    row.add("mass_euler", kg, lambda: jnp.sum(sums()["euler"][:n]))
+    row.add("mass_gas_particles", kg, lambda: jnp.sum(sums()["particles"][:n]))
+    row.add("mass_structures", kg, lambda: sums()["structure"])
+    row.add("mass_reservoirs", kg, lambda: jnp.sum(sums()["reservoirs"][:n]))
     row.add("mass_boundary_out", kg, lambda: jnp.sum(s.budget.boundary_out[:n]))
     row.add("mass_budget_residual", "1", lambda: when_coupled(
-        (jnp.sum(b()["account"][:n]) - jnp.sum(s.baseline[:n])) / jnp.sum(b()["scale"][:n])))
-    row.add("energy_euler", J, lambda: b()["euler"][-1])
-    row.add("energy_particles", J, lambda: b()["particles"][-1])
-    row.add("energy_reservoirs", J, lambda: b()["reservoirs"][-1])
+        (jnp.sum(sums()["account"][:n]) - jnp.sum(s.baseline[:n])) / jnp.sum(sums()["scale"][:n])))
+    row.add("energy_euler", J, lambda: sums()["euler"][-1])
+    row.add("energy_particles", J, lambda: sums()["particles"][-1])
+    row.add("energy_reservoirs", J, lambda: sums()["reservoirs"][-1])
     row.add("energy_boundary_out", J, lambda: s.budget.boundary_out[-1])
     row.add("energy_pressure_transfer", J, lambda: s.budget.pressure_transfer[-1])
-    row.add("energy_budget_residual", "1", lambda: when_coupled((b()["account"][-1] - s.baseline[-1]) / b()["scale"][-1]))
+    row.add("energy_budget_residual", "1", lambda: when_coupled(
+        (sums()["account"][-1] - s.baseline[-1]) / sums()["scale"][-1]))
     row.add("energy_mpm_step", J, lambda: s.budget.mpm_step[-1])
-    row.add("energy_transport_residual", "1", lambda: when_coupled(b()["transport"][-1] / b()["scale"][-1]))
+    row.add("energy_transport_residual", "1", lambda: when_coupled(sums()["transport"][-1] / sums()["scale"][-1]))
     for a in conserved_momentum_axes(cfg.geometry, nd):
         row.add(f"momentum_{AXES[a]}_budget_residual", "1", lambda a=a: when_coupled(
-            (b()["account"][n + a] - s.baseline[n + a]) / b()["p_scale"]))
+            (sums()["account"][n + a] - s.baseline[n + a]) / sums()["p_scale"]))
         row.add(f"momentum_{AXES[a]}_transport_residual", "1",
-                lambda a=a: when_coupled(b()["transport"][a] / b()["p_scale"]))
+                lambda a=a: when_coupled(sums()["transport"][a] / sums()["p_scale"]))
     row.add_block([(f"reaction_impulse_{a}", mom) for a in axes] + [("reaction_work", J)], lambda: s.budget.reaction)
-    row.add_block([(f"momentum_{a}", mom) for a in axes], lambda: b()["total"][n:n + nd])
+    row.add_block([(f"momentum_{a}", mom) for a in axes], lambda: sums()["total"][n:n + nd])
     if cs.n_structure:
         def on():  # (fragments that left the box no longer count)
             return s.mpm.particles.active[:cs.n_structure]
