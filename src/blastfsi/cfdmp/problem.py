@@ -1,8 +1,8 @@
 """Initial data and the coupling layout of the ``cfdmp`` method (host side, NumPy; seed 000 Sec. 3).
 
-Composition, not duplication: the Eulerian part is :func:`blastfsi.euler.problem.build`
-on the same domain, grid and initial condition; the structures are
-:func:`blastfsi.mpm.problem.build` on the MPM background grid. This module adds
+Composition, not duplication: the Eulerian part is :func:`blastfsi.euler.problem.build_gas`
+on the same domain, grid and initial condition; the structures are placed by
+:func:`blastfsi.mpm.problem.place` on the MPM background grid. This module adds
 the coupling layout (cell indices in the Eulerian grid, C order):
 
 * the MPM box ``[box_lo, box_hi)`` in cells; a face of it not on the domain
@@ -31,12 +31,11 @@ from blastfsi.constitutive import get as get_model
 from blastfsi.euler import geometry
 from blastfsi.euler.config import Config as EulerConfig
 from blastfsi.euler.method import GEOMETRY_CODE
-from blastfsi.euler.scenario import EulerScenario, gas_materials
+from blastfsi.euler.scenario import gas_materials
 from blastfsi.materials import MaterialError, lookup
-from blastfsi.mpm.scenario import MPMScenario, body_materials
 from blastfsi.euler import problem as euler_problem
 from blastfsi.mpm import problem as mpm_problem
-from blastfsi.scenario import AXES, ScenarioError, validate_model
+from blastfsi.scenario import AXES, ScenarioError
 
 
 @dataclass(frozen=True)
@@ -129,57 +128,26 @@ def _cell_index(sc: CfdmpScenario, value: float, ax: int, dx: float, key: str) -
     return int(round(n))
 
 
-def _euler_scenario(sc: CfdmpScenario) -> EulerScenario:
-    """The Eulerian part as an ``euler`` scenario. A charge's automatic remap time must also come before
-    the blast reaches the MPM box: its point nearest to the charge is added as a last gauge (dropped again
-    by :func:`build`)."""
-    data = sc.model_dump(include={"name", "description", "domain", "boundaries", "grid", "initial", "materials",
-                                  "time", "output"})
-    del data["output"]["tracers"]  # (the structures' points, resolved by _structures)
-    euler_cfl = sc.numerics.euler_cfl or sc.numerics.cfl  # (euler_cfl > 0 when set)
-    data["materials"] = {k: v for k, v in sc.materials.items() if k in gas_materials(sc.initial)}
-    data.update(method="euler", numerics={"scheme": sc.numerics.scheme, "limiter": sc.numerics.limiter,
-                                          "cfl": euler_cfl, "precision": sc.numerics.precision})
+def _gas_part(sc: CfdmpScenario) -> euler_problem.GasPart:
+    """The whole-domain Eulerian grid's keys. A charge's automatic remap time must also come before the blast
+    reaches the MPM box: its point nearest to the charge is added as a last gauge (dropped again by
+    :func:`build`)."""
+    output = sc.output
     if sc.initial.kind == "charge" and sc.initial.remap_time is None:
         centre = np.asarray(sc.initial.center or [0.0] * sc.domain.ndim, float)
         nearest = np.clip(centre, sc.mpm_region.lower, sc.mpm_region.upper)
         if np.any(nearest != centre):  # (a charge inside the box: MPM everywhere, the gauges set the time)
-            data["output"]["gauges"] = list(data["output"]["gauges"]) + [nearest.tolist()]
-    return validate_model(EulerScenario, data)
-
-
-def _structures(sc: CfdmpScenario, grid: mpm.Grid, faces_kinds):
-    """(names, models, params, particles, body, tracers, clamped) of the structures on the MPM grid: tracers
-    the index of each output.tracers particle, clamped whether some structure has supports."""
-    if not sc.structures:
-        return [], [], [], None, np.zeros(0, int), (), False
-    used = body_materials(sc.structures, "structures")
-    try:
-        msc = validate_model(MPMScenario, {
-            "method": "mpm", "name": sc.name, "time": {"end": sc.time.end},
-            "grid": {"lower": list(grid.origin), "upper": list(grid.upper), "cells": grid.cells[0],
-                     "axisymmetric": grid.axisymmetric,
-                     "boundaries": {a: list(k) for a, k in zip(AXES, faces_kinds)}},
-            "bodies": [b.model_dump() for b in sc.structures],
-            "materials": {k: v for k, v in sc.materials.items() if k in used},
-            "numerics": {"shape": sc.numerics.shape}, "output": {"tracers": sc.output.tracers}})
-        s = mpm_problem.build(msc)
-    except ScenarioError as err:  # in the keys of this scenario: the MPM grid is the box (and its bridge faces)
-        text = str(err).replace("bodies[", "structures[").replace("the grid", "the MPM box (mpm_region)")
-        raise ScenarioError(text) from None
-    n = s.body.size
-    batch = mpm.Particles(*[np.asarray(a)[:n] if not isinstance(a, tuple) else type(a)(*[np.asarray(b)[:n] for b in a])
-                            for a in s.particles])
-    return list(s.materials), list(s.models), list(s.model_params), batch, s.body, s.tracers, s.prescribed
+            output = output.model_copy(update={"gauges": list(output.gauges) + [nearest.tolist()]})
+    return euler_problem.GasPart(
+        sc.domain, sc.boundaries, sc.grid, sc.initial,
+        {k: v for k, v in sc.materials.items() if k in gas_materials(sc.initial)}, sc.time, output,
+        sc.numerics.euler_cfl or sc.numerics.cfl)  # (euler_cfl > 0 when set)
 
 
 def build(sc: CfdmpScenario) -> Setup:
-    esc = _euler_scenario(sc)
-    esetup = euler_problem.build(esc)
-    n_gauges = len(sc.output.gauges)
-    if len(esc.output.gauges) > n_gauges:  # drop the box's limit point
-        esetup = dataclasses.replace(esetup, gauges=esetup.gauges[:n_gauges], gauge_cells=esetup.gauge_cells[:n_gauges])
-    g = esetup.grid
+    gas = _gas_part(sc)
+    g = euler_problem.grid_geometry(gas)  # (the grid's layout first: the structures are checked before a
+    #                                       charge's 1D detonation runs)
     nd, dx, shape = g.ndim, g.dx, g.shape
     box = sc.mpm_region
     lo = tuple(_cell_index(sc, v, ax, dx, "mpm_region.lower") for ax, v in enumerate(box.lower))
@@ -210,13 +178,6 @@ def build(sc: CfdmpScenario) -> Setup:
     grid = mpm.Grid(origin=tuple(g.lower[ax] + g_lo[ax] * dx for ax in range(nd)), cell_size=dx,
                     cells=tuple(g_hi[ax] - g_lo[ax] for ax in range(nd)), boundaries=tuple(kinds),
                     axisymmetric=axisymmetric)
-    metric = EulerConfig(shape, dx, GEOMETRY_CODE[g.geometry], esetup.bc, 1, len(esetup.materials), tuple(g.lower))
-    cell_volume = np.broadcast_to(geometry.cell_volumes(metric, np.float64), shape).ravel()
-
-    def face_measure(ax):  # (faces of axis ax) dx x area
-        return np.broadcast_to(geometry.face_measures(metric, ax, np.float64),
-                               tuple(m + (a == ax) for a, m in enumerate(shape)))
-
     # the bridge and fictitious cells; structures must stay beyond the cells the bridge reads
     idx = np.indices(shape)
     in_box = np.ones(shape, bool)
@@ -229,7 +190,14 @@ def build(sc: CfdmpScenario) -> Setup:
         core &= (i >= c_lo) & (i < c_hi)
         clear &= (i >= c_lo + FICTITIOUS_DEPTH * coupled[ax][0]) & (i < c_hi - FICTITIOUS_DEPTH * coupled[ax][1])
 
-    names, models, params, structures, body, tracers, clamped = _structures(sc, grid, kinds)
+    placed = mpm_problem.place(sc.structures, grid, sc.materials, tracers=sc.output.tracers, key="structures",
+                               grid_name="the MPM box (mpm_region)") if sc.structures else None
+    names, models, params = ([], [], []) if placed is None else (list(placed.names), list(placed.models),
+                                                                 list(placed.model_params))
+    structures = None if placed is None else placed.particles
+    body = np.zeros(0, int) if placed is None else placed.body
+    tracers = () if placed is None else placed.tracers
+    clamped = any(b.supports for b in sc.structures)
     box_lower = np.array([g.lower[ax] + lo[ax] * dx for ax in range(nd)])
     box_upper = np.array([g.lower[ax] + hi[ax] * dx for ax in range(nd)])
     if structures is not None:
@@ -244,6 +212,17 @@ def build(sc: CfdmpScenario) -> Setup:
                                 f"(particle at {xs[np.argmax(near)].tolist()} m): keep structures inside "
                                 f"mpm_region and at least {w + FICTITIOUS_DEPTH} cells from every face bordering "
                                 "the Eulerian region")
+
+    esetup = euler_problem.build_gas(gas)
+    n_gauges = len(sc.output.gauges)
+    if len(gas.output.gauges) > n_gauges:  # drop the box's limit point
+        esetup = dataclasses.replace(esetup, gauges=esetup.gauges[:n_gauges], gauge_cells=esetup.gauge_cells[:n_gauges])
+    metric = EulerConfig(shape, dx, GEOMETRY_CODE[g.geometry], esetup.bc, 1, len(esetup.materials), tuple(g.lower))
+    cell_volume = np.broadcast_to(geometry.cell_volumes(metric, np.float64), shape).ravel()
+
+    def face_measure(ax):  # (faces of axis ax) dx x area
+        return np.broadcast_to(geometry.face_measures(metric, ax, np.float64),
+                               tuple(m + (a == ax) for a, m in enumerate(shape)))
 
     # gases: the Eulerian materials as fluid particles
     gas_material = []
@@ -386,7 +365,9 @@ def build(sc: CfdmpScenario) -> Setup:
         activation_overpressure=box.activation_overpressure, capacity_grows=grows, pool_margin=pool_margin,
         tracers=tuple(tracers), coupled_faces=tuple(f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
                                                     for f in faces))
-    return Setup(esetup, grid, tuple(names), tuple(models), tuple(params), tuple(gas_material), structures, body,
-                 int(capacity), lo, hi, tuple(faces), core, core & clear, ~in_box, ring_cells, ring_x, ring_volume, ring_half,
-                 cell_volume,
-                 gx, gvol, ghalf, gcell, tuple(boundary_measure), outflow_area, coupling)
+    return Setup(euler=esetup, grid=grid, materials=tuple(names), models=tuple(models), model_params=tuple(params),
+                 gas_material=tuple(gas_material), structures=structures, body=body, capacity=int(capacity),
+                 box_lo=lo, box_hi=hi, faces=tuple(faces), fictitious=core, parked=core & clear, outside=~in_box,
+                 ring_cells=ring_cells, ring_x=ring_x, ring_volume=ring_volume, ring_half=ring_half,
+                 cell_volume=cell_volume, gas_x=gx, gas_volume=gvol, gas_half=ghalf, gas_cell=gcell,
+                 boundary_measure=tuple(boundary_measure), outflow_area=outflow_area, coupling=coupling)

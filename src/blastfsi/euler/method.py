@@ -3,6 +3,9 @@ initial data from :mod:`blastfsi.euler.problem`, the kernels of
 :mod:`blastfsi.euler`, blast maps and gauges of :mod:`blastfsi.diagnostics.blast_maps`."""
 from __future__ import annotations
 
+import dataclasses
+import functools
+
 from typing import NamedTuple
 
 import jax
@@ -95,15 +98,15 @@ class Euler:
     scenario_model = EulerScenario
 
     def build(self, sc: EulerScenario) -> problem.Setup:
-        devices(sc)  # (before a charge's 1D detonation)
-        return problem.build(sc)
+        n = devices(sc)  # (before a charge's 1D detonation)
+        return dataclasses.replace(problem.build(sc), devices=n)
 
     def _cfg(self, setup: problem.Setup, sc: EulerScenario) -> kernels.Config:
         return kernels.Config(shape=setup.grid.shape, dx=float(setup.grid.dx),
                               geometry=GEOMETRY_CODE[setup.grid.geometry], bc=setup.bc,
                               scheme=SCHEME_CODE[sc.numerics.scheme], n_materials=len(setup.materials),
                               origin=tuple(float(v) for v in setup.grid.lower),
-                              limiter=LIMITER_CODE[sc.numerics.limiter], devices=devices(sc))
+                              limiter=LIMITER_CODE[sc.numerics.limiter], devices=setup.devices)
 
     def static(self, setup: problem.Setup, sc: EulerScenario) -> Static:
         flat = tuple(int(np.ravel_multi_index(c, setup.grid.shape)) for c in setup.gauge_cells)
@@ -124,12 +127,11 @@ class Euler:
         maps = blast_maps.initial(_pressure(U, params, static.cfg) - params.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
         clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
-        clock["t"] = jnp.asarray(setup.charge.get("remap_time", 0.0), dtype)
+        clock["t"] = jnp.asarray(setup.start_time, dtype)
         return State(U, *maps, **clock)
 
     def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         cfg = static.cfg
-        gauges = jnp.asarray(static.gauge_cells, jnp.int32)
 
         def stable_dt(s):
             return kernels.stable_dt(s.U, params.kernel, cfg)
@@ -141,26 +143,13 @@ class Euler:
             return placed(s._replace(U=U, **maps._asdict()), cfg)
 
         def history_row(s):
-            prim = kernels.primitives(s.U, params.kernel, cfg)
-            mass, momentum, energy = kernels.total(s.U, cfg)
-            flat = [prim["pressure"].reshape(-1)[gauges] - params.reference_pressure,
-                    prim["rho"].reshape(-1)[gauges]]
-            flat += [prim["velocity"][d].reshape(-1)[gauges] for d in range(len(cfg.shape))]
-            per_gauge = jnp.stack(flat, axis=1).reshape(-1)
-            return jnp.concatenate([jnp.stack([s.t, mass, energy]), momentum, per_gauge])
+            return history(static, s, params).values(s.t.dtype)
 
         return timeloop.run_until(placed(state, cfg), t_stop, max_steps, sample_interval, dt_floor_fraction,
                                   stable_dt=stable_dt, step=step, history_row=history_row)
 
     def history_columns(self, setup: problem.Setup, sc: EulerScenario) -> tuple:
-        ndim = setup.grid.ndim
-        cols = [("time", "s"), ("mass", _per(ndim, setup.grid.geometry, "kg")),
-                ("energy", _per(ndim, setup.grid.geometry, "J"))]
-        cols += [(f"momentum_{a}", _per(ndim, setup.grid.geometry, "kg*m/s")) for a in AXES[:ndim]]
-        for k in range(len(setup.gauges)):
-            cols += [(f"gauge{k}_overpressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
-            cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:ndim]]
-        return tuple(cols)
+        return history(self.static(setup, sc)).columns
 
     def _cell_fields(self, state: State, setup: problem.Setup, cfg) -> dict:
         params = self.params(setup, np.asarray(state.U).dtype)
@@ -259,12 +248,47 @@ class Euler:
                             z_plane=sc.output.plot_plane_z)
 
 
-def _per(ndim: int, geometry: str, unit: str) -> str:
-    if geometry in ("spherical", "axisymmetric") or ndim == 3:
+def _per(cfg: kernels.Config, unit: str) -> str:
+    """``unit`` of a whole-domain total: per metre (1D cylinder, 2D plane) or per square metre (1D slab) where
+    the grid stands for an infinite extent."""
+    nd = len(cfg.shape)
+    if nd == 3 or cfg.geometry == kernels.SPHERICAL or (cfg.geometry == kernels.CYLINDRICAL and nd == 2):
         return unit
-    if geometry == "cylindrical" or ndim == 2:
+    if cfg.geometry == kernels.CYLINDRICAL or nd == 2:
         return f"{unit}/m"
     return f"{unit}/m^2"
 
 
 METHOD = register(Euler())
+
+
+def history(static: Static, s: State | None = None, params: Params | None = None) -> timeloop.Row:
+    """The history row of state ``s``: the time, the grid's mass, energy and momentum, and per gauge the
+    overpressure, density and velocity of its cell. Without a state only its columns (``.columns``) can be
+    read."""
+    cfg = static.cfg
+    nd = len(cfg.shape)
+    gauges = jnp.asarray(static.gauge_cells, jnp.int32)
+
+    @functools.cache
+    def totals():  # (traced: only when s is given)
+        return kernels.total(s.U, cfg)
+
+    @functools.cache
+    def prim():
+        return kernels.primitives(s.U, params.kernel, cfg)
+
+    def at_gauges(field):
+        return field.reshape(-1)[gauges]
+
+    row = timeloop.Row()
+    row.add("time", "s", lambda: s.t)
+    row.add("mass", _per(cfg, "kg"), lambda: totals()[0])
+    row.add("energy", _per(cfg, "J"), lambda: totals()[2])
+    row.add_block([(f"momentum_{a}", _per(cfg, "kg*m/s")) for a in AXES[:nd]], lambda: totals()[1])
+    for k in range(len(static.gauge_cells)):
+        row.add(f"gauge{k}_overpressure", "Pa", lambda k=k: at_gauges(prim()["pressure"])[k] - params.reference_pressure)
+        row.add(f"gauge{k}_density", "kg/m^3", lambda k=k: at_gauges(prim()["rho"])[k])
+        row.add_block([(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:nd]],
+                      lambda k=k: jnp.stack([at_gauges(prim()["velocity"][d])[k] for d in range(nd)]))
+    return row

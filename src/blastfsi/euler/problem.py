@@ -11,15 +11,33 @@ import numpy as np
 
 from blastfsi.detonation.charge import charge_initial
 from blastfsi.euler.config import BlastTable
-from blastfsi.euler.scenario import EulerScenario
-from blastfsi.scenario import AXES
+from blastfsi.euler.scenario import Boundaries, Domain, EulerOutput, EulerScenario, Grid, Initial
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import JWLExplosive
-from blastfsi.scenario import ScenarioError, cells_along
+from blastfsi.scenario import AXES, ScenarioError, Time, cells_along
 
 GEOMETRY_CODE = {"cartesian": 0, "cylindrical": 1, "spherical": 2, "axisymmetric": 1}
 # a blast face is an outflow face to the scheme; its layer of cells is set from the blast table
 BOUNDARY_CODE = {"outflow": 0, "wall": 1, "symmetry": 1, "axis": 2, "periodic": 3, "blast": 0}
+
+
+@dataclass(frozen=True)
+class GasPart:
+    """What the Eulerian builder reads: the gas keys of a validated scenario (``euler``'s, or the whole-domain
+    grid of ``cfdmp``'s, which shares these keys' schema) and the Courant number of the Eulerian step."""
+
+    domain: Domain
+    boundaries: Boundaries
+    grid: Grid
+    initial: Initial
+    materials: dict  # per-material overrides of library constants, of the gases only
+    time: Time
+    output: EulerOutput  # gauges, arrival_fraction (and, for a charge, the points its remap must not reach)
+    cfl: float
+
+    @classmethod
+    def of(cls, sc: EulerScenario) -> "GasPart":
+        return cls(sc.domain, sc.boundaries, sc.grid, sc.initial, sc.materials, sc.time, sc.output, sc.numerics.cfl)
 
 
 @dataclass(frozen=True)
@@ -60,22 +78,24 @@ class Setup:
     gauge_cells: tuple[tuple[int, ...], ...]
     cfl: float  # numerics.cfl
     arrival_fraction: float  # output.arrival_fraction: the overpressure that marks arrival, of the ambient pressure
-    charge: dict = field(default_factory=dict)  # a charge's 1D detonation and remap (ChargeInitial.info), JSON;
+    start_time: float = 0.0  # the simulated time of the initial state: a charge's remap time (detonation at 0)
+    charge: dict = field(default_factory=dict)  # a charge's 1D detonation and remap, for the summary (JSON);
     #                                             empty for other initial kinds
-    blast: dict | None = None  # the blast table of a stand-off charge (blastfsi.detonation.charge.blast_table)
+    blast: BlastTable | None = None  # a stand-off charge's blast table (host arrays), None without blast faces
+    devices: int = 1  # devices the grid is split across (numerics.devices, resolved by the euler method)
 
     @property
     def cells(self) -> int:
         return int(np.prod(self.grid.shape))
 
 
-def grid_geometry(sc: EulerScenario) -> GridGeometry:
+def grid_geometry(sc: GasPart) -> GridGeometry:
     d = sc.domain
     dx, shape = cells_along(d.lower, d.upper, sc.grid.cells, "domain")
     return GridGeometry(shape, dx, tuple(d.lower), d.geometry)
 
 
-def boundary_codes(sc: EulerScenario) -> tuple[tuple[int, int], ...]:
+def boundary_codes(sc: GasPart) -> tuple[tuple[int, int], ...]:
     out = []
     for k, ax in enumerate(AXES[: sc.domain.ndim]):
         lo, hi = getattr(sc.boundaries, ax)
@@ -95,7 +115,7 @@ def boundary_codes(sc: EulerScenario) -> tuple[tuple[int, int], ...]:
     return tuple(out)
 
 
-def _material(sc: EulerScenario, name: str, key: str):
+def _material(sc: GasPart, name: str, key: str):
     try:
         return lookup(name, sc.materials.get(name), field=key)
     except MaterialError as err:
@@ -118,7 +138,7 @@ def _order(names: list[str], mats: dict) -> tuple[str, ...]:
     return tuple(sorted(unique, key=lambda n: not isinstance(mats[n], JWLExplosive)))
 
 
-def _gauges(sc: EulerScenario, g: GridGeometry):
+def _gauges(sc: GasPart, g: GridGeometry):
     """Gauge points (validated inside the domain by the schema) and the cell holding each."""
     pts = np.asarray([np.atleast_1d(np.asarray(raw, float)) for raw in sc.output.gauges], float).reshape(-1, g.ndim)
     return pts, tuple(g.cell_of(p) for p in pts)
@@ -131,20 +151,26 @@ def blast_params(setup: Setup, dtype):
     b = setup.blast
     if b is None:
         return None
-    return BlastTable(jnp.asarray(b["cells"], jnp.int32), jnp.asarray(b["radius"], dtype),
-                      jnp.asarray(b["unit"], dtype), jnp.asarray(b["t0"], dtype), jnp.asarray(b["dt"], dtype),
-                      jnp.asarray(b["rows"], dtype))
+    return BlastTable(jnp.asarray(b.cells, jnp.int32), *(jnp.asarray(v, dtype) for v in b[1:]))
 
 
 def build(sc: EulerScenario) -> Setup:
+    return build_gas(GasPart.of(sc))
+
+
+def build_gas(sc: GasPart) -> Setup:
+    """The initial grid of the gas part ``sc`` (also the whole-domain grid of a coupled run)."""
     g = grid_geometry(sc)
     bc = boundary_codes(sc)
     init = sc.initial
     if init.kind == "charge":
         c = charge_initial(sc, g)
         gauges, gauge_cells = _gauges(sc, g)
-        return Setup(g, c.materials, c.eos, bc, c.rho_k, c.alpha, c.velocity, c.pressure, c.reference_pressure,
-                     gauges, gauge_cells, sc.numerics.cfl, sc.output.arrival_fraction, c.info, c.blast)
+        return Setup(grid=g, materials=c.materials, eos=c.eos, bc=bc, rho_k=c.rho_k, alpha=c.alpha,
+                     velocity=c.velocity, pressure=c.pressure, reference_pressure=c.reference_pressure,
+                     gauges=gauges, gauge_cells=gauge_cells, cfl=sc.cfl,
+                     arrival_fraction=sc.output.arrival_fraction, start_time=float(c.info["remap_time"]),
+                     charge=c.info, blast=None if c.blast is None else BlastTable(**c.blast))
     ndim = g.ndim
     mesh = g.mesh()
     if init.kind == "riemann":
@@ -189,8 +215,9 @@ def build(sc: EulerScenario) -> Setup:
         pressure = pressure + _point_energy_pressure(sc, g, centre, mats[amb.material])
     eos = np.array([list(mats[m].eos_params()) for m in materials], float)
     gauges, gauge_cells = _gauges(sc, g)
-    return Setup(g, materials, eos, bc, rho_k, alpha, velocity, pressure, float(p_ref), gauges, gauge_cells,
-                 sc.numerics.cfl, sc.output.arrival_fraction)
+    return Setup(grid=g, materials=materials, eos=eos, bc=bc, rho_k=rho_k, alpha=alpha, velocity=velocity,
+                 pressure=pressure, reference_pressure=float(p_ref), gauges=gauges, gauge_cells=gauge_cells,
+                 cfl=sc.cfl, arrival_fraction=sc.output.arrival_fraction)
 
 
 def cell_volumes(g: GridGeometry) -> np.ndarray:
@@ -206,7 +233,7 @@ def cell_volumes(g: GridGeometry) -> np.ndarray:
     return ring if g.ndim == 1 else np.broadcast_to(ring[:, None] * g.dx, g.shape).copy()
 
 
-def _point_energy_pressure(sc, g: GridGeometry, centre, material) -> np.ndarray:
+def _point_energy_pressure(sc: GasPart, g: GridGeometry, centre, material) -> np.ndarray:
     """Overpressure that puts ``initial.energy`` as internal energy into the cells within
     ``radius_cells`` of the centre (weight = cell volume inside the sphere, sub-sampled),
     exactly: sum over cells of volume * delta(rho e) = E (ideal gas or JWL alike, since
@@ -233,7 +260,7 @@ def _point_energy_pressure(sc, g: GridGeometry, centre, material) -> np.ndarray:
     return omega * init.energy * _domain_share(sc, g, centre) * frac / total
 
 
-def _domain_share(sc, g: GridGeometry, centre) -> float:
+def _domain_share(sc: GasPart, g: GridGeometry, centre) -> float:
     """Fraction of a blast centred at ``centre`` that the domain simulates: 1/2 per
     symmetry plane or wall through the centre (the rest is its mirror image); the
     radial axis of a cylindrical/spherical/axisymmetric grid needs no such factor."""

@@ -62,6 +62,7 @@ class Setup:
     geometry: int  # j
     zones: tuple  # scheme.Zones fields as NumPy arrays (N,)
     explosive_zones: int  # zones 0 .. explosive_zones-1 hold the explosive
+    arrival_fraction: float  # output.arrival_fraction: a gauge's arrival overpressure, of p0
     info: dict = field(default_factory=dict)
     gauges: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ambient_pressure: float = 0.0
@@ -161,8 +162,7 @@ def build(sc: Scenario) -> Setup:
                                 "energy is released in burnt products only")
         rate = ch.afterburn_energy / (hx.density * (ch.afterburn_end - ch.afterburn_start))
         afterburn = (np.where(hx_zone, rate, 0.0), ch.afterburn_start, ch.afterburn_end)
-    info = {"arrival_fraction": sc.output.arrival_fraction,
-            "charge_mass": mass, "charge_radius": radius, "charge_zone_width": h, "detonation_velocity": D,
+    info = {"charge_mass": mass, "charge_radius": radius, "charge_zone_width": h, "detonation_velocity": D,
             "explosive": ch.explosive, "explosive_energy": hx.E0 * mass / hx.density,
             "ambient_pressure": p_a, "ambient_density": rho_a, "gamma": gamma, "geometry": sc.domain.geometry,
             "measure": MEASURE[j], "plate_areal_mass": right_mass,
@@ -171,4 +171,5 @@ def build(sc: Scenario) -> Setup:
                  numerics=(gamma, sc.numerics.K1, sc.numerics.K2, sc.numerics.cfl),
                  boundaries=(0.0, p_a, right_mass, back), left_velocity_set=True, right_fixed=right_fixed,
                  geometry=j, zones=zones, explosive_zones=nc, info=info,
-                 gauges=np.asarray(sc.output.gauges, float), ambient_pressure=p_a, afterburn=afterburn)
+                 gauges=np.asarray(sc.output.gauges, float), ambient_pressure=p_a,
+                 arrival_fraction=sc.output.arrival_fraction, afterburn=afterburn)

@@ -52,7 +52,7 @@ class Lagrangian1D:
         def arr(values):
             return jnp.asarray(values, dtype)
 
-        threshold = setup.info.get("arrival_fraction", 0.01) * setup.ambient_pressure
+        threshold = setup.arrival_fraction * setup.ambient_pressure
         return scheme.Params(num=scheme.Numerics(*map(arr, setup.numerics)),
                              bc=scheme.Boundaries(*map(arr, setup.boundaries)),
                              gauges=scheme.Gauges(arr(setup.gauges), arr(setup.ambient_pressure), arr(threshold)),
@@ -66,7 +66,7 @@ class Lagrangian1D:
         return scheme.advance(state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction)
 
     def history_columns(self, setup: plate1d.Setup, sc: Scenario) -> tuple:
-        return scheme.history_columns(len(sc.output.gauges))
+        return scheme.history(len(sc.output.gauges)).columns
 
     def snapshot(self, state: scheme.State, setup) -> Polyline:
         j = _geometry(setup)

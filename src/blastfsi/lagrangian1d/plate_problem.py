@@ -32,6 +32,7 @@ class Setup:
     info: dict = field(default_factory=dict)  # theory values and problem metadata (JSON-able)
     gauges: np.ndarray = field(default_factory=lambda: np.zeros(0))  # gauge positions [m]
     ambient_pressure: float = 0.0  # overpressure reference p0 of the gauges [Pa]
+    arrival_fraction: float = 0.0  # output.arrival_fraction: a gauge's arrival overpressure, of p0 (set by build)
 
     @property
     def cells(self) -> int:
@@ -231,4 +232,5 @@ BUILDERS = {"uniform": build_uniform, "exponential": build_exponential, "sedov":
 
 def build(sc: Scenario) -> Setup:
     setup = BUILDERS[sc.incident.profile](sc)
-    return replace(setup, gauges=np.asarray(sc.output.gauges, float), ambient_pressure=sc.gas.pressure)
+    return replace(setup, gauges=np.asarray(sc.output.gauges, float), ambient_pressure=sc.gas.pressure,
+                   arrival_fraction=sc.output.arrival_fraction)

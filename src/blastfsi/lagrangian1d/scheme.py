@@ -55,6 +55,8 @@ Geometry and materials (seed 000 Sec. 4.1, the 1D detonation):
 """
 from __future__ import annotations
 
+import functools
+
 from typing import NamedTuple
 
 import jax.numpy as jnp
@@ -170,26 +172,8 @@ class State(NamedTuple):
     dt0: jnp.ndarray  # the run's first stable step
     step: jnp.ndarray
     fault: jnp.ndarray  # timeloop fault code (first_fault locates a non-physical zone)
-    hist: jnp.ndarray  # (n_samples, N_HIST + G) histories sampled in compiled code
+    hist: jnp.ndarray  # (n_samples, columns of history) histories sampled in compiled code
     hist_next: jnp.ndarray  # index of the next history sample to record
-
-
-HISTORY_COLUMNS = (
-    ("time", "s"),
-    ("plate_displacement", "m"),
-    ("plate_velocity", "m/s"),
-    ("plate_overpressure", "Pa"),
-    ("plate_impulse", "Pa*s"),
-    ("surface_impulse", "Pa*s"),
-    ("left_overpressure", "Pa"),
-    ("energy_error", "J/m^2"),
-)
-N_HIST = len(HISTORY_COLUMNS)
-
-
-def history_columns(n_gauges: int) -> tuple:
-    """(name, unit) of every history column: the plate's, then one per gauge."""
-    return HISTORY_COLUMNS + tuple((f"gauge{k}_overpressure", "Pa") for k in range(n_gauges))
 
 
 def ideal_gas_zones(gamma, n: int, dtype) -> Zones:
@@ -372,18 +356,37 @@ def first_fault(s: State):
     return jnp.where(jnp.any(bad), jnp.argmax(bad), -1).astype(jnp.int32)
 
 
-def history_row(s: State, params: Params, static: Static, zones: Zones):
-    bc = params.bc
-    p = zone_pressure(s, zones, static.geometry)
-    v_plate = 0.0 * s.v[-1] if static.right_fixed else s.v[-1]
-    plate_impulse = s.face_impulse if static.right_fixed else bc.right_mass * s.v[-1]
-    # the afterburning source is booked as supplied (0 without afterburning)
-    energy_error = total_energy(s, bc) - s.energy0 - s.boundary_work - s.afterburn_released
-    plate = jnp.stack([
-        s.t, s.x[-1] - params.x_right0, v_plate, p[-1] - bc.right_pressure, plate_impulse,
-        s.face_impulse, p[0] - bc.right_pressure, energy_error,
-    ])
-    return jnp.concatenate([plate, gauge_overpressure(s, params.gauges, zones, static.geometry)])
+def history(n_gauges: int, s: State | None = None, params: Params | None = None, static: Static | None = None,
+            zones: Zones | None = None) -> timeloop.Row:
+    """The history row of state ``s``: the plate's displacement, velocity, overpressure and impulse, the
+    impulse on the right face, the left end's overpressure and the energy error, then the overpressure of each
+    of the ``n_gauges`` gauges. Without a state only its columns (``.columns``) can be read."""
+
+    @functools.cache
+    def pressure():  # (traced: only when s is given)
+        return zone_pressure(s, zones, static.geometry)
+
+    def plate_velocity():
+        return 0.0 * s.v[-1] if static.right_fixed else s.v[-1]
+
+    def plate_impulse():
+        return s.face_impulse if static.right_fixed else params.bc.right_mass * s.v[-1]
+
+    def energy_error():  # the afterburning source is booked as supplied (0 without afterburning)
+        return total_energy(s, params.bc) - s.energy0 - s.boundary_work - s.afterburn_released
+
+    row = timeloop.Row()
+    row.add("time", "s", lambda: s.t)
+    row.add("plate_displacement", "m", lambda: s.x[-1] - params.x_right0)
+    row.add("plate_velocity", "m/s", plate_velocity)
+    row.add("plate_overpressure", "Pa", lambda: pressure()[-1] - params.bc.right_pressure)
+    row.add("plate_impulse", "Pa*s", plate_impulse)
+    row.add("surface_impulse", "Pa*s", lambda: s.face_impulse)
+    row.add("left_overpressure", "Pa", lambda: pressure()[0] - params.bc.right_pressure)
+    row.add("energy_error", "J/m^2", energy_error)
+    row.add_block([(f"gauge{k}_overpressure", "Pa") for k in range(n_gauges)],
+                  lambda: gauge_overpressure(s, params.gauges, zones, static.geometry))
+    return row
 
 
 def initial_state(x, v, e, zone_mass, gamma, n_samples: int, n_gauges: int = 0, right_mass=0.0,
@@ -403,7 +406,7 @@ def initial_state(x, v, e, zone_mass, gamma, n_samples: int, n_gauges: int = 0, 
         peak_face_overpressure=jnp.asarray(-jnp.inf, x.dtype), boundary_work=zero,
         gauge_impulse=g, gauge_peak=g - jnp.inf, gauge_arrival=g + jnp.inf, gauge_end=g + jnp.inf,
         gauge_positive_impulse=g, gauge_last=g, zone_burnt=jnp.zeros_like(e),
-        afterburn_released=zero, **timeloop.clock(n_samples, N_HIST + n_gauges, x.dtype),
+        afterburn_released=zero, **timeloop.clock(n_samples, len(history(n_gauges).columns), x.dtype),
     )
     right = Boundaries(zero, zero, jnp.asarray(right_mass, x.dtype), zero)
     return s._replace(energy0=total_energy(s, right))
@@ -435,4 +438,4 @@ def advance(s: State, params: Params, static: Static, t_stop, max_steps, sample_
                             gauge_end=maps.end, gauge_positive_impulse=maps.impulse, gauge_last=maps.last)
 
     return timeloop.run_until(s, t_stop, max_steps, sample_interval, dt_floor_fraction, stable_dt=stable, step=step,
-                              history_row=lambda st: history_row(st, params, static, zones))
+                              history_row=lambda st: history(gauges.positions.shape[0], st, params, static, zones).values(st.t.dtype))

@@ -27,6 +27,8 @@ energy, so the budget stays closed (no erosion, nothing removed).
 """
 from __future__ import annotations
 
+import functools
+
 from pathlib import Path
 from typing import NamedTuple
 
@@ -66,6 +68,7 @@ class Params(NamedTuple):
 class Static(NamedTuple):
     config: mpm.Config
     tracers: tuple  # particle index of each tracer
+    n_gauges: int  # output.gauges
 
 
 def _cast(tree, dtype):
@@ -74,10 +77,12 @@ def _cast(tree, dtype):
         tree)
 
 
-def _energy_unit(setup: problem.Setup, unit: str) -> str:
-    if setup.grid.axisymmetric or setup.ndim == 3:
+def _energy_unit(grid: mpm.Grid, unit: str) -> str:
+    """``unit`` of a whole-body total: per metre (plane strain) or per square metre (1D) where the grid stands
+    for an infinite extent."""
+    if grid.axisymmetric or grid.dim == 3:
         return unit
-    return f"{unit}/m" if setup.ndim == 2 else f"{unit}/m^2"
+    return f"{unit}/m" if grid.dim == 2 else f"{unit}/m^2"
 
 
 def tracer_columns(n: int, axes) -> list:
@@ -115,7 +120,7 @@ class MPM:
     def static(self, setup: problem.Setup, sc: MPMScenario) -> Static:
         relax = relaxation.gas_materials(setup.models, sc.numerics.pressure_relaxation)
         return Static(mpm.make_config(setup.grid, setup.models, shape=sc.numerics.shape,
-                                      prescribed=setup.prescribed, relax=relax), setup.tracers)
+                                      prescribed=setup.prescribed, relax=relax), setup.tracers, len(setup.gauges))
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         prm = mpm.make_params(setup.model_params, cfl=setup.cfl, q_quadratic=setup.q_quadratic,
@@ -132,9 +137,6 @@ class MPM:
 
     def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         cfg = static.config
-        d = cfg.grid.dim
-        tracers = jnp.asarray(static.tracers, jnp.int32)
-        h = cfg.grid.cell_size
 
         def stable_dt(s):
             return mpm.stable_dt(s.mpm, params.mpm, cfg)
@@ -143,38 +145,13 @@ class MPM:
             return s._replace(mpm=mpm.step(s.mpm, dt, params.mpm, cfg))
 
         def history_row(s):
-            P = s.mpm.particles
-            tot = mpm.totals(P)
-            e = mpm.energies(s.mpm)
-            row = [s.t, tot.kinetic, tot.internal, tot.plastic, e["external_work"], tot.mass, *tot.momentum[:d],
-                   *s.mpm.reaction]
-            row += tracer_row(P, tracers, params.tracer_x0, d)
-            if params.gauges.shape[0]:
-                dist = jnp.linalg.norm(P.x[None, :, :d] - params.gauges[:, None, :d], axis=2)
-                dist = jnp.where(P.active[None, :], dist, jnp.inf)
-                near = jnp.argmin(dist, axis=1)
-                found = jnp.min(dist, axis=1) <= h
-                pressure = -(P.point.stress[near, 0] + P.point.stress[near, 1] + P.point.stress[near, 2]) / 3.0
-                cols = [pressure, P.point.density[near]] + [P.v[near, i] for i in range(d)]
-                row += list(jnp.where(found[:, None], jnp.stack(cols, axis=1), jnp.nan).reshape(-1))
-            return jnp.stack([jnp.asarray(r, s.hist.dtype) for r in row])
+            return history(static, s, params).values(s.hist.dtype)
 
         return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
                                   stable_dt=stable_dt, step=step, history_row=history_row)
 
     def history_columns(self, setup: problem.Setup, sc: MPMScenario) -> tuple:
-        d = setup.ndim
-        axes = ("r", "z") if setup.grid.axisymmetric else AXES[:d]
-        J, kg = _energy_unit(setup, "J"), _energy_unit(setup, "kg")
-        cols = [("time", "s"), ("kinetic_energy", J), ("internal_energy", J), ("plastic_work", J),
-                ("external_work", J), ("mass", kg)]
-        cols += [(f"momentum_{a}", _energy_unit(setup, "kg*m/s")) for a in axes]
-        cols += [(f"reaction_impulse_{a}", _energy_unit(setup, "kg*m/s")) for a in axes] + [("reaction_work", J)]
-        cols += tracer_columns(len(setup.tracers), axes)
-        for k in range(len(setup.gauges)):
-            cols += [(f"gauge{k}_pressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
-            cols += [(f"gauge{k}_velocity_{a}", "m/s") for a in axes]
-        return tuple(cols)
+        return history(self.static(setup, sc)).columns
 
     def snapshot(self, state: State, setup: problem.Setup) -> Particles:
         P = state.mpm.particles
@@ -271,7 +248,7 @@ class MPM:
         quantities = ("kinetic_energy", "internal_energy", "plastic_work")
         ts = scale(np.concatenate([h["time"] for h in histories]), "time")
         es = scale(np.concatenate([h[q] for h in histories for q in quantities]), "energy")
-        per = _energy_unit(setups[0], "J")[1:]  # ("/m^2" in 1D, "/m" in plane 2D)
+        per = _energy_unit(setups[0].grid, "J")[1:]  # ("/m^2" in 1D, "/m" in plane 2D)
         fig, ax = plt.subplots(figsize=(6, 4))
         for k, h in enumerate(histories):
             for q in quantities:
@@ -333,6 +310,50 @@ def impactor_shape(x: np.ndarray, setup: problem.Setup, body: int) -> dict:
     face = axial <= np.min(axial) + s
     return {"final_length": float(np.max(axial) - np.min(axial) + s),
             "footprint_diameter": float(2.0 * (np.max(radial[face]) + 0.5 * s))}
+
+
+def history(static: Static, s: State | None = None, params: Params | None = None) -> timeloop.Row:
+    """The history row of state ``s``: the time, the energies (kinetic, internal, plastic work, external work),
+    mass and momentum, the supports' reaction, the tracers' displacements and per gauge the pressure, density
+    and velocity of the nearest particle within one cell (NaN where none is). Without a state only its
+    columns (``.columns``) can be read."""
+    grid = static.config.grid
+    d = grid.dim
+    axes = ("r", "z") if grid.axisymmetric else AXES[:d]
+    J, kg, mom = (_energy_unit(grid, u) for u in ("J", "kg", "kg*m/s"))
+    P = None if s is None else s.mpm.particles
+
+    @functools.cache
+    def totals():  # (traced: only when s is given)
+        return mpm.totals(P)
+
+    row = timeloop.Row()
+    row.add("time", "s", lambda: s.t)
+    row.add("kinetic_energy", J, lambda: totals().kinetic)
+    row.add("internal_energy", J, lambda: totals().internal)
+    row.add("plastic_work", J, lambda: totals().plastic)
+    row.add("external_work", J, lambda: mpm.energies(s.mpm)["external_work"])
+    row.add("mass", kg, lambda: totals().mass)
+    row.add_block([(f"momentum_{a}", mom) for a in axes], lambda: totals().momentum[:d])
+    row.add_block([(f"reaction_impulse_{a}", mom) for a in axes] + [("reaction_work", J)], lambda: s.mpm.reaction)
+    tracers = jnp.asarray(static.tracers, jnp.int32)
+    row.add_block(tracer_columns(len(static.tracers), axes),
+                  lambda: jnp.stack(tracer_row(P, tracers, params.tracer_x0, d)))
+
+    @functools.cache
+    def near():  # per gauge: [pressure, density, velocity...] of the nearest particle within one cell, or NaN
+        dist = jnp.linalg.norm(P.x[None, :, :d] - params.gauges[:, None, :d], axis=2)
+        dist = jnp.where(P.active[None, :], dist, jnp.inf)
+        i = jnp.argmin(dist, axis=1)
+        found = jnp.min(dist, axis=1) <= grid.cell_size
+        pressure = -(P.point.stress[i, 0] + P.point.stress[i, 1] + P.point.stress[i, 2]) / 3.0
+        cols = [pressure, P.point.density[i]] + [P.v[i, c] for c in range(d)]
+        return jnp.where(found[:, None], jnp.stack(cols, axis=1), jnp.nan)
+
+    for k in range(static.n_gauges):
+        row.add_block([(f"gauge{k}_pressure", "Pa"), (f"gauge{k}_density", "kg/m^3")]
+                      + [(f"gauge{k}_velocity_{a}", "m/s") for a in axes], lambda k=k: near()[k])
+    return row
 
 
 METHOD = register(MPM())

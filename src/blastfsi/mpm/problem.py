@@ -79,13 +79,6 @@ def _vector(value, ndim: int, key: str, along_last: bool = False) -> np.ndarray:
     return v
 
 
-def _material(sc: MPMScenario, name: str, key: str):
-    try:
-        return lookup(name, sc.materials.get(name), field=key)
-    except MaterialError as err:
-        raise ScenarioError(str(err)) from None
-
-
 def _box_of(body, grid: mpm.Grid) -> tuple[np.ndarray, np.ndarray]:
     """Bounding box [lower, upper] of a body."""
     if body.shape == "box":
@@ -110,13 +103,14 @@ def inside_body(body, x: np.ndarray, grid: mpm.Grid) -> np.ndarray:
     return box & (np.hypot(x[:, 0] - c[0], x[:, 1] - c[1]) <= body.radius)
 
 
-def _fill(grid: mpm.Grid, lower, upper, per_cell: int, key: str):
-    """Lattice positions, volumes and GIMP half-sizes in [lower, upper], with errors naming ``key``."""
+def _fill(grid: mpm.Grid, lower, upper, per_cell: int, key: str, grid_name: str):
+    """Lattice positions, volumes and GIMP half-sizes in [lower, upper], with errors naming ``key`` and
+    ``grid_name``."""
     g_lo, g_hi = np.asarray(grid.origin), np.asarray(grid.upper)
     tol = 1e-9 * grid.cell_size
     if np.any(lower < g_lo - tol) or np.any(upper > g_hi + tol):
         raise ScenarioError(f"{key}: the body [{np.asarray(lower).tolist()}, {np.asarray(upper).tolist()}] m leaves "
-                            f"the grid [{g_lo.tolist()}, {g_hi.tolist()}] m")
+                            f"{grid_name} [{g_lo.tolist()}, {g_hi.tolist()}] m")
     small = (upper - lower) < grid.cell_size * (1.0 - 1e-9)
     if np.any(small):
         ax = AXES[int(np.argmax(small))]
@@ -155,55 +149,78 @@ def _initial_gas_state(material, density, pressure, key: str):
     return rho, e, pressure
 
 
-def build(sc: MPMScenario) -> Setup:
-    grid = grid_of(sc)
+@dataclass(frozen=True)
+class Placement:
+    """Bodies placed on a grid (:func:`place`): materials by index, the created particles (active only, in body
+    order), and per particle its body and spacing."""
+
+    names: tuple[str, ...]  # library names, by material index
+    library: tuple  # the library entry of each material
+    models: tuple  # constitutive Model per material
+    model_params: tuple  # host-side model parameters per material
+    particles: mpm.Particles  # (n,) created particles
+    body: np.ndarray  # (n,) body index (the impactor last)
+    spacing: np.ndarray  # (n,) particle spacing s [m]
+    extents: tuple[float, ...]  # per body of ``bodies``, its extent along x [m]
+    tracers: tuple[int, ...]  # particle index of each tracer point
+
+
+def place(bodies, grid: mpm.Grid, overrides: dict, *, tracers=(), impactor=None, key: str = "bodies",
+          grid_name: str = "the grid") -> Placement:
+    """Fill ``bodies`` (and the ``impactor`` rod) with particles on ``grid``; ``overrides`` the scenario's
+    ``[materials]``; ``tracers`` points, each mapped to the nearest particle. Errors name ``key[k]`` for the
+    k-th body and ``grid_name`` for the grid (the ``mpm`` method's ``bodies`` and grid, or the structures in
+    the MPM box of a coupled run)."""
     d = grid.dim
     names: list[str] = []
     library: dict[str, object] = {}
 
-    def index(name: str, key: str) -> int:
+    def index(name: str, field: str) -> int:
         if name not in library:
-            library[name] = _material(sc, name, key)
+            try:
+                library[name] = lookup(name, overrides.get(name), field=field)
+            except MaterialError as err:
+                raise ScenarioError(str(err)) from None
             names.append(name)
         return names.index(name)
 
     batches, body_ids, spacings, extents = [], [], [], []
-    for k, b in enumerate(sc.bodies):
-        key = f"bodies[{k}]"
-        mat_index = index(b.material, f"{key}.material")
+    for k, b in enumerate(bodies):
+        body_key = f"{key}[{k}]"
+        mat_index = index(b.material, f"{body_key}.material")
         mat = library[b.material]
         lower, upper = _box_of(b, grid)
-        x, vol, half = _fill(grid, lower, upper, b.particles_per_cell, key)
+        x, vol, half = _fill(grid, lower, upper, b.particles_per_cell, body_key, grid_name)
         keep = inside_body(b, x, grid)
         if not keep.any():
-            raise ScenarioError(f"{key}: the body holds no particle; enlarge it or refine grid.cells")
+            raise ScenarioError(f"{body_key}: the body holds no particle; enlarge it or refine grid.cells")
         x, vol, half = x[keep], vol[keep], half[keep]
-        for j, other in enumerate(sc.bodies[:k]):
+        for j, other in enumerate(bodies[:k]):
             clash = inside_body(other, x, grid)
             if clash.any():
-                raise ScenarioError(f"bodies[{j}] and {key} overlap (e.g. at {x[clash][0, :d].tolist()} m); "
+                raise ScenarioError(f"{key}[{j}] and {body_key} overlap (e.g. at {x[clash][0, :d].tolist()} m); "
                                     "bodies must not share volume")
         s = grid.cell_size / b.particles_per_cell
         v = np.zeros((len(vol), 3))
-        v[:, :d] = _vector(b.velocity, d, f"{key}.velocity")
+        v[:, :d] = _vector(b.velocity, d, f"{body_key}.velocity")
         if b.velocity_profile == "sine":
             v *= np.sin(0.5 * np.pi * (x[:, :1] - lower[0]) / (upper[0] - lower[0]))
         is_gas = model_name(mat) == FLUID
         if not is_gas and (b.density is not None or b.pressure is not None):
-            raise ScenarioError(f"{key}: density and pressure are initial states of gases; {b.material!r} is a "
+            raise ScenarioError(f"{body_key}: density and pressure are initial states of gases; {b.material!r} is a "
                                 f"solid (override its reference density under materials.{b.material})")
         if is_gas:
-            rho, energy, p = _initial_gas_state(mat, b.density, b.pressure, key)
+            rho, energy, p = _initial_gas_state(mat, b.density, b.pressure, body_key)
             stress = [-p, -p, -p, 0.0, 0.0, 0.0]
         else:
             rho, energy, stress = mat.density, 0.0, None
         load = None
         if b.top_traction is not None:
             traction = np.zeros(3)
-            traction[:d] = _vector(b.top_traction, d, f"{key}.top_traction", along_last=True)
+            traction[:d] = _vector(b.top_traction, d, f"{body_key}.top_traction", along_last=True)
             top = x[:, d - 1] > np.max(x[:, d - 1]) - 0.5 * s
             load = np.where(top[:, None], mpm.surface_load(traction, s), 0.0)
-        held = _clamped(b, x, key, d)
+        held = _clamped(b, x, body_key, d)
         free = ~held.any(axis=1)
         parts = [(free, dict(v=v[free], prescribed=v[free] if b.prescribed else None))]
         for mask in np.unique(held[~free], axis=0):  # clamped: zero prescribed velocity in the held components,
@@ -217,10 +234,9 @@ def build(sc: MPMScenario) -> Setup:
             spacings.append(np.full(int(part.sum()), s))
         extents.append(float(upper[0] - lower[0]))
 
-    imp = sc.impactor
+    imp = impactor
     if imp is not None:
-        key = "impactor"
-        mat_index = index(imp.material, f"{key}.material")
+        mat_index = index(imp.material, "impactor.material")
         mat = library[imp.material]
         if model_name(mat) == FLUID:
             raise ScenarioError(f"impactor.material: {imp.material!r} is a gas; the impactor is a solid rod")
@@ -229,31 +245,25 @@ def build(sc: MPMScenario) -> Setup:
         upper[:d - 1] += 0.5 * imp.diameter
         lower[d - 1] += imp.standoff
         upper[d - 1] = lower[d - 1] + imp.length
-        x, vol, half = _fill(grid, lower, upper, imp.particles_per_cell, key)
+        x, vol, half = _fill(grid, lower, upper, imp.particles_per_cell, "impactor", grid_name)
         if d == 3:
             keep = np.hypot(x[:, 0] - grid.origin[0], x[:, 1] - grid.origin[1]) <= 0.5 * imp.diameter
             x, vol, half = x[keep], vol[keep], half[keep]
-        for j, other in enumerate(sc.bodies):
+        for j, other in enumerate(bodies):
             clash = inside_body(other, x, grid)
             if clash.any():
-                raise ScenarioError(f"bodies[{j}] and the impactor overlap (e.g. at {x[clash][0, :d].tolist()} m)")
+                raise ScenarioError(f"{key}[{j}] and the impactor overlap (e.g. at {x[clash][0, :d].tolist()} m)")
         v = np.zeros((len(vol), 3))
         v[:, d - 1] = -imp.velocity
         batches.append(dict(x=x, volume=vol, density=mat.density, v=v, material=mat_index, half_size=half,
                             stress=None, energy=0.0, prescribed=None, surface_load=None))
-        body_ids.append(np.full(len(vol), len(sc.bodies)))
+        body_ids.append(np.full(len(vol), len(bodies)))
         spacings.append(np.full(len(vol), grid.cell_size / imp.particles_per_cell))
 
     history = max(get_model(model_name(library[n])).history_size for n in names)
     parts = [mpm.new_particles(b.pop("x")[:, :d], b.pop("volume"), b.pop("density"), history_size=history, **b)
              for b in batches]
     batch = mpm.concatenate(*parts)
-    n = int(np.asarray(batch.active).sum())
-    capacity = sc.numerics.capacity or n
-    if capacity < n:
-        raise ScenarioError(f"numerics.capacity = {capacity} is too small: the bodies hold {n} particles; "
-                            f"set numerics.capacity >= {n}")
-    pool = mpm.make_pool(batch, capacity)
     models = tuple(get_model(model_name(library[n_])) for n_ in names)
     params = []
     for name, model in zip(names, models):
@@ -261,19 +271,33 @@ def build(sc: MPMScenario) -> Setup:
             params.append(model.params_from(library[name]))
         except ValueError as err:
             raise ScenarioError(f"materials.{name}: {err}") from None
-    x0 = np.asarray(pool.x)[:n, :d]
-    tracers = []
-    for k, p in enumerate(sc.output.tracers):
+    x0 = np.asarray(batch.x)[:, :d]
+    found = []
+    for k, p in enumerate(tracers):
         dist = np.linalg.norm(x0 - np.asarray(p, float), axis=1)
         j = int(np.argmin(dist))
         if dist[j] > grid.cell_size:
             raise ScenarioError(f"output.tracers[{k}] = {p} m: no particle within one cell (h = {grid.cell_size:g} m)")
-        tracers.append(j)
+        found.append(j)
+    return Placement(tuple(names), tuple(library[n_] for n_ in names), models, tuple(params), batch,
+                     np.concatenate(body_ids), np.concatenate(spacings), tuple(extents), tuple(found))
+
+
+def build(sc: MPMScenario) -> Setup:
+    grid = grid_of(sc)
+    d = grid.dim
+    imp = sc.impactor
+    pl = place(sc.bodies, grid, sc.materials, tracers=sc.output.tracers, impactor=imp)
+    n = int(np.asarray(pl.particles.active).sum())
+    capacity = sc.numerics.capacity or n
+    if capacity < n:
+        raise ScenarioError(f"numerics.capacity = {capacity} is too small: the bodies hold {n} particles; "
+                            f"set numerics.capacity >= {n}")
+    pool = mpm.make_pool(pl.particles, capacity)
     gauges = np.asarray(sc.output.gauges, float).reshape(-1, d)
-    body = np.concatenate(body_ids)
-    spacing = np.concatenate(spacings)
+    body = pl.body
     mass = np.asarray(pool.mass)[:n]
-    speeds = np.asarray(mpm.initialize(pool, mpm.make_params(params), mpm.make_config(grid, models))
+    speeds = np.asarray(mpm.initialize(pool, mpm.make_params(pl.model_params), mpm.make_config(grid, pl.models))
                         .particles.wave_speed)[:n]
     bodies = tuple({"material": (sc.bodies[k].material if k < len(sc.bodies) else imp.material),
                     "particles": int(np.sum(body == k)), "mass": float(np.sum(mass[body == k])),
@@ -281,9 +305,11 @@ def build(sc: MPMScenario) -> Setup:
                    for k in range(len(sc.bodies) + (imp is not None)))
     sine = [k for k, b in enumerate(sc.bodies) if b.velocity_profile == "sine"]
     # fixed-free bar, first mode: T = 4 L / c (c the longitudinal wave speed)
-    period = 4.0 * extents[sine[0]] / bodies[sine[0]]["wave_speed"] if sine else None
-    n = sc.numerics
-    return Setup(grid, tuple(names), models, tuple(params), pool, body, spacing, tuple(tracers), gauges,
-                 any(b.prescribed or b.supports for b in sc.bodies), n.cfl, n.q_quadratic, n.q_linear,
-                 n.reference_pressure, tuple(sc.gravity) or (0.0,) * d, any(b.prescribed for b in sc.bodies),
-                 bodies, period)
+    period = 4.0 * pl.extents[sine[0]] / bodies[sine[0]]["wave_speed"] if sine else None
+    num = sc.numerics
+    return Setup(grid=grid, materials=pl.names, models=pl.models, model_params=pl.model_params, particles=pool,
+                 body=body, spacing=pl.spacing, tracers=pl.tracers, gauges=gauges,
+                 prescribed=any(b.prescribed or b.supports for b in sc.bodies), cfl=num.cfl,
+                 q_quadratic=num.q_quadratic, q_linear=num.q_linear, reference_pressure=num.reference_pressure,
+                 gravity=tuple(sc.gravity) or (0.0,) * d, driven=any(b.prescribed for b in sc.bodies),
+                 bodies=bodies, period_theory=period)
