@@ -101,6 +101,7 @@ HANDWRITTEN = [
      ["bodies[0].lower[0]"]),
     ("taylor-bar", ["impactor.velocity=-190.0"], ["impactor.velocity"]),
     ("he-slab-2d", ["mpm_region.upper=[100.0, 0.5]"], ["mpm_region"]),
+    ("steel-plate-blast", ['numerics.shape="linear"'], ["numerics.shape", "1D only", "gimp"]),
     # structures, named as structures (not as the MPM method's bodies), against the MPM box
     ("he-slab-2d", ['structures=[{shape = "box", lower = [0.134, 0.15], upper = [0.154, 0.6], material = "concrete-48mpa"}]'],
      ["structures[0]", "leaves the MPM box (mpm_region)"]),

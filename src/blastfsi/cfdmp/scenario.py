@@ -64,7 +64,7 @@ class CfdmpNumerics(MPMNumerics):
     euler_cfl: Optional[float] = Field(None, gt=0.0, le=1.0, description=(
         "Courant number of the Eulerian step (default: cfl). HLLC-MUSCL's is taken on the sum of the directions' "
         "signal speeds (stable to 1), so at equal numbers its step is 1/ndim of the MPM's"))
-    shape: Literal["linear", "gimp"] = Field("gimp", description="MPM shape functions")
+    shape: Literal["linear", "gimp"] = Field("gimp", description="MPM shape functions ('linear' in 1D only)")
     gas_pic_fraction: float = Field(GAS_PIC_FRACTION, ge=0.0, le=1.0, description=(
         "PIC share alpha of the gas particles' G2P velocity (FLIP/PIC blend, its kinetic-energy loss heats the "
         "particle; 0: pure FLIP; structures stay FLIP)"))
@@ -113,6 +113,11 @@ class CfdmpScenario(ScenarioBase):
                 and box.activation_overpressure > 0.0:
             raise ValueError("mpm_region covers the whole domain (MPM everywhere, the grid only carries the initial "
                              "condition): mpm_region.activation_overpressure must be 0")
+        if self.numerics.shape == "linear" and nd > 1:
+            raise ValueError("numerics.shape = 'linear' runs cfdmp in 1D only: in 2D and 3D the gas particles of the "
+                             "MPM box cross cells, and linear shape functions' cell-crossing error (a gradient that "
+                             "jumps as a particle crosses a cell face) drives lone particles of the expanding gas to "
+                             "non-physical states; use 'gimp' (the default), whose gradients are continuous")
         for kinds, ax in zip((self.boundaries.x, self.boundaries.y, self.boundaries.z), AXES[:nd]):
             if "periodic" in kinds:
                 raise ValueError(f"boundaries.{ax}: periodic faces are not supported by cfdmp")
