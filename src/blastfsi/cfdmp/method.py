@@ -261,7 +261,7 @@ class Cfdmp:
         maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
         clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
-        clock["t"] = jnp.asarray(setup.euler.charge.get("remap_time", 0.0), dtype)
+        clock["t"] = jnp.asarray(setup.euler.start_time, dtype)
         state = State(U, *maps, mpm=ms, reservoirs=res, budget=budget, coupled=jnp.asarray(False), baseline=zeros,
                       displaced=zeros, **clock)
         if setup.coupling.activation_overpressure == 0.0:
