@@ -25,6 +25,8 @@ from pathlib import Path
 
 import jax
 
+from machine import cpu_model
+
 # coarse, short runs: compilation does not depend on the end time, and little on the grid
 CASES = {
     # to 10 us: past the automatic remap of the 1D detonation (9.6 us), so the coupled loop runs
@@ -68,13 +70,6 @@ def cache_size(directory: str) -> int:
     return sum(f.stat().st_size for f in Path(directory).rglob("*") if f.is_file())
 
 
-def processor() -> str:
-    cpuinfo = Path("/proc/cpuinfo")
-    names = [ln.split(":", 1)[1].strip() for ln in cpuinfo.read_text().splitlines()
-             if ln.startswith("model name")] if cpuinfo.is_file() else []
-    return names[0] if names else platform.processor() or platform.machine()
-
-
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
@@ -82,7 +77,7 @@ def main(argv=None) -> None:
     ap.add_argument("--check", action="store_true", help="also run without the cache and compare the summaries")
     args = ap.parse_args(argv)
     rows = []
-    report = {"machine": {"platform": platform.platform(), "processor": processor(), "cpu_count": os.cpu_count(),
+    report = {"machine": {"platform": platform.platform(), "processor": cpu_model(), "cpu_count": os.cpu_count(),
                           "device": str(jax.devices()[0]), "jax": jax.__version__, "python": platform.python_version()},
               "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
               "command": (f"PYTHONPATH={os.environ['PYTHONPATH']} " if os.environ.get("PYTHONPATH") else "")

@@ -22,6 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from machine import described
+
 CHILD = """
 import json, sys
 import blastfsi
@@ -30,16 +32,6 @@ s = res.summary
 print(json.dumps({k: s.get(k) for k in ("method", "status", "steps", "cells", "compile_time", "loop_time",
                                         "wall_time")}))
 """
-
-
-def machine() -> str:
-    cpu = ""
-    try:
-        cpu = next(line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                   if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return f"{cpu or platform.processor() or platform.machine()}, {os.cpu_count()} CPUs"
 
 
 def run_one(name: str, timeout: float) -> dict:
@@ -106,7 +98,7 @@ def main() -> None:
     from blastfsi.api import example_names
 
     names = args.only or [n for n in example_names() if n not in args.skip]
-    data.update(machine=machine(), python=platform.python_version(), jax=jax.__version__,
+    data.update(machine=described(), python=platform.python_version(), jax=jax.__version__,
                 command=" ".join(["python", "benchmarks/example_times.py", *sys.argv[1:]]))
     for name in names:
         rec = run_one(name, args.timeout)

@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import time
 from pathlib import Path
 
@@ -46,6 +45,7 @@ from blastfsi.mpm.viscosity import signal_speed
 from blastfsi.scenario import expand
 from blastfsi.simulation import _grow, _stack, compiled_advance
 from blastfsi.timeloop import FAULT_NONE, FAULT_POOL_FULL
+from machine import cpu_model
 
 RESOLVED = 0.01  # resolved gas: density above this share of the ambient density
 LIMITS = ("euler", "structure", "gas")
@@ -189,13 +189,6 @@ def summarise(rows, final, steps, every, rho_ambient, loop_s, diag_s, example, e
         "end_time": final["t"], "centre_displacement_end": final["centre_displacement"],
         "rows": [r for i, r in enumerate(rows) if i % every == 0 or i == len(rows) - 1],
     }
-
-
-def cpu_model() -> str:
-    info = Path("/proc/cpuinfo")
-    names = [line.split(":", 1)[1].strip() for line in (info.read_text().splitlines() if info.is_file() else [])
-             if line.startswith("model name")]
-    return names[0] if names else platform.machine()
 
 
 def main() -> None:

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 import blastfsi
+from machine import cpu_model
 
 CASES = {  # name -> (example, overrides)
     "sedov-2d lax-wendroff": ("sedov-2d", {"numerics.scheme": "lax-wendroff"}),
@@ -35,14 +36,6 @@ def steps(example: str, overrides: dict) -> dict:
     fewest = blastfsi.run(example, set={**overrides, "output.history_samples": 2}).summary
     return {"steps": shipped["steps"], "steps_with_2_samples": fewest["steps"], "time": shipped["time"],
             "loop_time_s": round(shipped["loop_time"], 2), "wall_s": round(time.perf_counter() - started, 1)}
-
-
-def cpu_model() -> str:
-    """The CPU's model name (Linux), else the architecture."""
-    info = Path("/proc/cpuinfo")
-    names = [line.split(":", 1)[1].strip() for line in (info.read_text().splitlines() if info.is_file() else [])
-             if line.startswith("model name")]
-    return names[0] if names else platform.machine()
 
 
 def main() -> None:
