@@ -108,6 +108,8 @@ HANDWRITTEN = [
     ("he-slab-2d", ['structures=[{shape = "box", lower = [0.134, 0.15], upper = [0.154, 0.35], material = "concrete-48mpa"}, '
                     '{shape = "box", lower = [0.134, 0.3], upper = [0.154, 0.4], material = "concrete-48mpa"}]'],
      ["structures[0] and structures[1] overlap"]),
+    ("he-slab-2d", ['structures=[{shape = "box", lower = [0.134], upper = [0.154], material = "concrete-48mpa"}]'],
+     ["structures[0].lower", "2 coordinate(s)"]),
     ("sod", ["time.end=-1.0"], ["time.end"]),
     ("sod", ['grid.cells="many"'], ["grid.cells"]),
     ("sod", ["grid.cells=100.5"], ["grid.cells"]),

@@ -16,8 +16,8 @@ from pydantic import Field, model_validator
 
 from blastfsi.euler.scenario import (Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_gas_part,
                                      gas_materials, grid_demand)
-from blastfsi.mpm.scenario import (Body, MPMNumerics, Tracers, body_materials, body_particles, lattice_count,
-                                   particle_demand)
+from blastfsi.mpm.scenario import (Body, MPMNumerics, Tracers, body_materials, body_particles, check_bodies,
+                                   lattice_count, particle_demand)
 from blastfsi.scenario import AXES, Coordinate, Demand, ScenarioBase, Strict, check_box
 
 # Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
@@ -121,6 +121,7 @@ class CfdmpScenario(ScenarioBase):
         for kinds, ax in zip((self.boundaries.x, self.boundaries.y, self.boundaries.z), AXES[:nd]):
             if "periodic" in kinds:
                 raise ValueError(f"boundaries.{ax}: periodic faces are not supported by cfdmp")
+        check_bodies(self.structures, nd, d.geometry == "axisymmetric", "structures")
         for k, b in enumerate(self.structures):
             if b.prescribed:
                 raise ValueError(f"structures[{k}].prescribed: structures are not driven bodies")

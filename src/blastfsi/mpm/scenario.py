@@ -231,6 +231,37 @@ def particle_demand(capacity: int | None, particles: float, key: str) -> Demand:
     return Demand(key, particles, "particles", WORDS_PER_PARTICLE)
 
 
+def check_bodies(bodies, nd: int, axisymmetric: bool, key: str) -> None:
+    """The bodies against the grid they stand on (``nd`` axes, r-z or not): coordinates per axis, supports'
+    axes, a cylinder's centre and length; errors name ``key[k]`` (the mpm method's bodies, cfdmp's
+    structures)."""
+    for k, b in enumerate(bodies):
+        body_key = f"{key}[{k}]"
+        for name in ("lower", "upper"):
+            value = getattr(b, name)
+            if value is not None and len(value) != nd:
+                raise ValueError(f"{body_key}.{name}: expected {nd} coordinate(s), got {len(value)}")
+        for j, sup in enumerate(b.supports):
+            if len(sup.lower) != nd:
+                raise ValueError(f"{body_key}.supports[{j}]: expected {nd} coordinate(s), got {len(sup.lower)}")
+            if sup.hold is not None and any(AXES.index(a) >= nd for a in sup.hold):
+                raise ValueError(f"{body_key}.supports[{j}].hold: a {nd}D grid has the axes {list(AXES[:nd])}, "
+                                 f"got {sup.hold}")
+        if b.shape == "cylinder":
+            if nd == 1:
+                raise ValueError(f"{body_key}.shape: a cylinder needs a 2D or 3D grid")
+            if len(b.center) != nd:
+                raise ValueError(f"{body_key}.center: expected {nd} coordinate(s), got {len(b.center)}")
+            plane = nd == 2 and not axisymmetric
+            if plane and b.length is not None:
+                raise ValueError(f"{body_key}.length: a cylinder in a 2D plane-strain grid is a disk; omit length")
+            if not plane and b.length is None:
+                raise ValueError(f"{body_key}.length: a cylinder in a {'3D' if nd == 3 else 'r-z'} grid needs length")
+            if axisymmetric and b.center[0] != 0.0:
+                raise ValueError(f"{body_key}.center: a cylinder on an axisymmetric grid lies on the axis, "
+                                 f"center[r] must be 0 (got {b.center[0]})")
+
+
 class MPMScenario(ScenarioBase):
     method: Literal["mpm"] = "mpm"
     grid: GridSpec
@@ -263,31 +294,7 @@ class MPMScenario(ScenarioBase):
         for k, p in enumerate(self.output.tracers):
             if len(p) != nd:
                 raise ValueError(f"output.tracers[{k}] = {p}: expected {nd} coordinate(s)")
-        for k, b in enumerate(self.bodies):
-            key = f"bodies[{k}]"
-            for name in ("lower", "upper"):
-                value = getattr(b, name)
-                if value is not None and len(value) != nd:
-                    raise ValueError(f"{key}.{name}: expected {nd} coordinate(s), got {len(value)}")
-            for j, sup in enumerate(b.supports):
-                if len(sup.lower) != nd:
-                    raise ValueError(f"{key}.supports[{j}]: expected {nd} coordinate(s), got {len(sup.lower)}")
-                if sup.hold is not None and any(AXES.index(a) >= nd for a in sup.hold):
-                    raise ValueError(f"{key}.supports[{j}].hold: a {nd}D grid has the axes {list(AXES[:nd])}, "
-                                     f"got {sup.hold}")
-            if b.shape == "cylinder":
-                if nd == 1:
-                    raise ValueError(f"{key}.shape: a cylinder needs a 2D or 3D grid")
-                if len(b.center) != nd:
-                    raise ValueError(f"{key}.center: expected {nd} coordinate(s), got {len(b.center)}")
-                plane = nd == 2 and not g.axisymmetric
-                if plane and b.length is not None:
-                    raise ValueError(f"{key}.length: a cylinder in a 2D plane-strain grid is a disk; omit length")
-                if not plane and b.length is None:
-                    raise ValueError(f"{key}.length: a cylinder in a {'3D' if nd == 3 else 'r-z'} grid needs length")
-                if g.axisymmetric and b.center[0] != 0.0:
-                    raise ValueError(f"{key}.center: a cylinder on an axisymmetric grid lies on the axis, "
-                                     f"center[r] must be 0 (got {b.center[0]})")
+        check_bodies(self.bodies, nd, g.axisymmetric, "bodies")
         if self.impactor is not None and nd == 1:
             raise ValueError("impactor: needs a 2D or 3D grid (the rod's axis is the last axis)")
         if self.sweep is not None and self.sweep.velocity is not None and self.impactor is None:
