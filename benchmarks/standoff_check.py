@@ -55,11 +55,14 @@ import time
 from pathlib import Path
 
 import blastfsi
+from blastfsi.detonation.charge import run_1d
 from blastfsi.exact import kingery_bulmash as kb
 from blastfsi.exact import shock
+from blastfsi.lagrangian1d.charge_problem import charge_radius
 from blastfsi.materials.gases import GASES
 
 AIR = GASES["air"]
+AIR_1D = {"gamma": AIR.gamma, "pressure": AIR.pressure, "density": AIR.density}  # the 1D detonation's air
 
 MASS = 10.0  # kg TNT
 # per Z: wall distance D [m], cell size dx [m], radius W [m], stand-off depth L [m], depth behind the charge B [m]
@@ -203,11 +206,7 @@ def incident(zs, pair_dx: float | None = None) -> list[dict]:
 
 def oned(zs) -> list[dict]:
     """The 1D detonation's incident peak at D against its own zoning (ONED_ZONING), to the pairs' end time."""
-    from blastfsi.detonation.charge import run_1d
-    from blastfsi.lagrangian1d.charge_problem import charge_radius
-
-    gas = {"gamma": AIR.gamma, "pressure": AIR.pressure, "density": AIR.density}
-    radius = charge_radius(MASS, GASES["tnt"].density, 2)
+    gas, radius = AIR_1D, charge_radius(MASS, GASES["tnt"].density, 2)
     rows = []
     for z in zs:
         D = CASES[z][0]
@@ -233,11 +232,7 @@ def oned(zs) -> list[dict]:
 
 def sph(zs) -> list[dict]:
     """The pair in 1D spherical euler (module docstring), outer face a wall and an outflow face."""
-    from blastfsi.detonation.charge import run_1d
-    from blastfsi.lagrangian1d.charge_problem import charge_radius
-
-    gas = {"gamma": AIR.gamma, "pressure": AIR.pressure, "density": AIR.density}
-    radius = charge_radius(MASS, GASES["tnt"].density, 2)
+    gas, radius = AIR_1D, charge_radius(MASS, GASES["tnt"].density, 2)
     rows = []
     for z in zs:
         D, _, _, L, B = CASES[z]
