@@ -55,7 +55,7 @@ import time
 from pathlib import Path
 
 import blastfsi
-from blastfsi.detonation.charge import run_1d
+from blastfsi.detonation.charge import one_d_scenario
 from blastfsi.exact import kingery_bulmash as kb
 from blastfsi.exact import shock
 from blastfsi.lagrangian1d.charge_problem import charge_radius
@@ -213,7 +213,8 @@ def oned(zs) -> list[dict]:
         t_end = kb.value("arrival_time", MASS, D) + 0.5 * kb.value("positive_phase_duration", MASS, D)
         for cells, ratio in ONED_ZONING[z]:
             started = time.perf_counter()
-            g = run_1d("tnt", radius, cells, ratio, 1.6 * D + 10.0 * radius, t_end, gas, [D]).summary["gauges"][0]
+            g = blastfsi.run(one_d_scenario("tnt", radius, cells, ratio, 1.6 * D + 10.0 * radius, t_end, gas,
+                                            [D])).summary["gauges"][0]
             row = {"Z": z, "distance_m": D, "zones_across_charge": cells, "air_zone_m": ratio * radius / cells,
                    "peak_overpressure": g["peak_overpressure"], "impulse": g["impulse"],
                    "arrival_time": g["arrival_time"], "reflection_of_peak": reflected(g["peak_overpressure"]),
@@ -237,8 +238,8 @@ def sph(zs) -> list[dict]:
     for z in zs:
         D, _, _, L, B = CASES[z]
         t_end = float(kb.value("arrival_time", MASS, D) + 1.2 * kb.value("positive_phase_duration", MASS, D))
-        probe = run_1d("tnt", radius, 100, 10.0, 1.5 * B + 10.0 * radius, 1.5 * kb.value("arrival_time", MASS, B),
-                       gas, [B])
+        probe = blastfsi.run(one_d_scenario("tnt", radius, 100, 10.0, 1.5 * B + 10.0 * radius,
+                                            1.5 * kb.value("arrival_time", MASS, B), gas, [B]))
         t_remap = probe.summary["gauges"][0]["arrival_time"]  # the full run's remap: the blast at radius B
         for dx in SPH_DX[z]:
             row = {"Z": z, "distance_m": D, "dx_m": dx, "full_remap_time": t_remap}

@@ -43,7 +43,8 @@ from blastfsi.euler.step import _bad_and_speed
 from blastfsi.mpm.musl import VOID_DENSITY
 from blastfsi.mpm.viscosity import signal_speed
 from blastfsi.scenario import expand
-from blastfsi.simulation import _grow, _stack, compiled_advance
+from blastfsi.method import compiled_advance
+from blastfsi.simulation import _grow, _stack
 from blastfsi.timeloop import FAULT_NONE, FAULT_POOL_FULL
 from machine import cpu_model
 

@@ -84,8 +84,7 @@ def test_spherical_detonation_conserves_energy_and_reports_gauges(one_kg):
     # the vNR energy defect is first order in dt (docs/theory/lagrangian1d.md); strong burn fronts make it
     # 0.3 % at 40 zones (measured 0.25-0.35 % over 100-1600 zones in the CJ study)
     assert abs(s["energy_error_relative"]) < 1e-2
-    info = one_kg.setups[0].info
-    total = info["measure"] * float(np.sum(one_kg.setups[0].zone_mass[:40]))
+    total = one_kg.setups[0].charge.measure * float(np.sum(one_kg.setups[0].zone_mass[:40]))
     assert total == pytest.approx(1.0, rel=1e-12) and s["charge_mass"] == pytest.approx(1.0, rel=1e-12)
     g = s["gauges"]
     assert [x["position"] for x in g] == [0.5, 0.9]
@@ -200,8 +199,8 @@ def test_afterburn_off_is_the_scheme_without_it(one_kg):
 
 def test_afterburn_is_booked_in_the_energy_budget(one_kg):
     run = blastfsi.run(charge_data(**AFTERBURN))
-    s, info = run.summary, run.setups[0].info
-    volume = info["charge_mass"] / RHO_TNT
+    s, charge = run.summary, run.setups[0].charge
+    volume = charge.charge_mass / RHO_TNT
     assert s["afterburn_energy_total"] == pytest.approx(E0_TNT * volume, rel=1e-12)
     # the whole window lies inside the run: exactly Q x charge volume released (round-off of ~1e3 steps)
     assert s["afterburn_energy_released"] == pytest.approx(E0_TNT * volume, rel=1e-12)
@@ -210,7 +209,7 @@ def test_afterburn_is_booked_in_the_energy_budget(one_kg):
     assert abs(s["energy_error_relative"]) < 1e-2
     err = abs(float(run.history["energy_error"][-1]))
     err0 = abs(float(one_kg.history["energy_error"][-1]))
-    released = s["afterburn_energy_released"] / info["measure"]
+    released = s["afterburn_energy_released"] / charge.measure
     assert err < 3.0 * err0 and err < 0.01 * released
     # the added energy drives a stronger blast at both gauges
     for g, g0 in zip(s["gauges"], one_kg.summary["gauges"]):

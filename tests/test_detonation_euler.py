@@ -22,7 +22,7 @@ def test_charge_remapped_into_euler_conserves_and_runs():
     setup = res.setups[0]
     info = setup.charge
     for key in ("remap_mass_error", "remap_products_error", "remap_energy_error"):
-        assert abs(info[key]) < 1e-12, key  # round-off (the remap's exact targets)
+        assert abs(getattr(info, key)) < 1e-12, key  # round-off (the remap's exact targets)
     # the conservative state the euler method builds from the remapped primitives holds the same sums
     U = jnp.asarray(res.state.U)[0]
     cfg = blastfsi.method.get("euler")._cfg(setup, parse(euler_charge()))
@@ -31,14 +31,14 @@ def test_charge_remapped_into_euler_conserves_and_runs():
     # products stay where the 1D solution put them: the grid holds the charge mass of products (closed domain)
     # and the ambient air beyond the disturbed radius is untouched air
     vol = kernels.geometry.cell_volumes(cfg, U.dtype)
-    assert float(jnp.sum(U[0] * vol)) == pytest.approx(info["charge_mass"], rel=1e-12)
+    assert float(jnp.sum(U[0] * vol)) == pytest.approx(info.charge_mass, rel=1e-12)
     far = res.fields()
     assert np.all(far["products_fraction"][-10:] == 0.0)
     assert far["density"][-10:] == pytest.approx(1.225, rel=1e-12)  # library air (ISA sea level)
     hist = res.history
     assert abs(hist["mass"][-1] / hist["mass"][0] - 1) < 1e-12  # closed until the blast reaches the outflow
     assert abs(hist["energy"][-1] / hist["energy"][0] - 1) < 1e-10
-    assert info["remap_time"] == 2e-5 and info["remap_radius"] < 0.6
+    assert info.remap_time == 2e-5 and info.remap_radius < 0.6
 
 
 def test_bad_charge_initial_is_rejected():

@@ -7,7 +7,7 @@ import math
 import pytest
 import tomli_w
 
-import blastfsi.simulation
+import blastfsi.method
 from blastfsi import cli
 from blastfsi.api import example_data
 
@@ -140,7 +140,7 @@ def no_compilation(monkeypatch, tmp_path):
     def trap(*args, **kwargs):
         raise AssertionError("a hostile input reached the compiler")
 
-    monkeypatch.setattr(blastfsi.simulation, "compiled_advance", trap)
+    monkeypatch.setattr(blastfsi.method, "compiled_advance", trap)
     work = tmp_path / "work"
     work.mkdir()
     monkeypatch.chdir(work)

@@ -86,7 +86,7 @@ def test_radial_wall_in_rz_is_normal_incidence():
 
 def test_height_of_burst_ground_gauges_are_reflected_free_air_ones_incident():
     sc = parse(example_data("tnt-height-of-burst"))
-    refs = kbc.scenario_references(sc, {"charge_center": [0.0, 1.0], "kb_burst": "free-air"}, 0.02)
+    refs = kbc.scenario_references(sc, [0.0, 1.0], "free-air", 0.02)
     # ground gauges at r = 0, 1, 2, 3 m under a charge 1 m up: 0, 45, 63.4, 71.6 deg
     assert [r["kind"] for r in refs] == ["reflected"] * 4 + ["incident"] * 2
     theta = [r["angle_of_incidence_deg"] for r in refs[:4]]
@@ -105,7 +105,7 @@ def test_height_of_burst_ground_gauges_are_reflected_free_air_ones_incident():
 
 def test_surface_burst_ground_gauges_are_surface_incident():
     sc = parse(example_data("tnt-surface-burst"))
-    refs = kbc.scenario_references(sc, {"charge_center": [0.0, 0.0], "kb_burst": "surface"}, 0.02)
+    refs = kbc.scenario_references(sc, [0.0, 0.0], "surface", 0.02)
     assert [(r["kind"], r["burst"]) for r in refs] == [("incident", "surface")] * 3
     assert refs[0]["reference"] == "surface-burst incident (hemispherical)"
     values, _ = kbc.reference_values(1.0, 2.0, refs[1])
@@ -116,7 +116,7 @@ def test_explicit_reference_wins():
     data = example_data("tnt-height-of-burst")
     data["output"]["gauge_references"] = ["incident", "surface-incident", "auto", "auto", "reflected", "auto"]
     sc = parse(data)
-    refs = kbc.scenario_references(sc, {"charge_center": [0.0, 1.0], "kb_burst": "free-air"}, 0.02)
+    refs = kbc.scenario_references(sc, [0.0, 1.0], "free-air", 0.02)
     assert (refs[0]["kind"], refs[0]["burst"], refs[0]["source"]) == ("incident", "free-air", "set")
     assert (refs[1]["kind"], refs[1]["burst"]) == ("incident", "surface")
     assert refs[2]["kind"] == "reflected" and refs[2]["source"] == "auto"

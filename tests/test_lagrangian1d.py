@@ -124,8 +124,8 @@ def test_plate_matches_quasi_steady_theory():
     # 1.5 % covers the shock smearing (3 zones) at 800 zones.
     ps = 4.49 * P0
     res = simulation.run(uniform_data(grid__cells=800, output__fields=0))
-    info = res.setups[0].info
-    v_theory = shock.quasi_steady_plate(ps, info["duration"], info["plate_areal_mass"], P0, RHO0)
+    theory = res.setups[0].theory
+    v_theory = shock.quasi_steady_plate(ps, theory.duration, theory.plate_areal_mass, P0, RHO0)
     assert res.summary["plate_velocity"] == pytest.approx(v_theory, rel=1.5e-2)
 
 

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+import blastfsi
 from blastfsi.detonation import remap as rm
 from blastfsi.eos.jwl import JWLParams, ideal_gas_params
 
@@ -151,12 +152,13 @@ def test_profile_and_grid_must_share_the_symmetry():
 def test_cylinder_remapped_from_lagrangian1d_matches_the_1d_solution():
     """The 1D cylindrical TNT detonation (R = 5 cm) at 30 us remapped onto 2D grids of dx = R/5 and
     R/10: shock radius and peak air pressure of the 2D field against the 1D solution."""
-    from blastfsi.detonation.charge import run_1d
+    from blastfsi.detonation.charge import one_d_scenario
     from blastfsi.materials.gases import GASES
 
     air, hx = GASES["air"], GASES["tnt"]
     rho0, p0, gamma = air.density, air.pressure, air.gamma
-    res = run_1d("tnt", 0.05, 100, 100.0, 1.0, 3e-5, {"gamma": gamma, "pressure": p0, "density": rho0}, j=1)
+    res = blastfsi.run(one_d_scenario("tnt", 0.05, 100, 100.0, 1.0, 3e-5,
+                                      {"gamma": gamma, "pressure": p0, "density": rho0}, j=1))
     st = {k: np.asarray(v)[0] for k, v in res.state._asdict().items()}
     nz = res.setups[0].explosive_zones
     prof = rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], nz, 1)
@@ -219,13 +221,13 @@ def test_cylindrical_charge_runs_on_a_plane_grid_and_conserves():
     res = blastfsi.run(plane_charge(end=3e-5, remap_time=2e-5))  # 10 us after the remap
     info = res.setups[0].charge
     for key in ("remap_mass_error", "remap_products_error", "remap_energy_error"):
-        assert abs(info[key]) < 1e-12, key  # round-off (the remap's exact targets)
-    assert info["charge_mass"] == pytest.approx(np.pi * 0.05**2 * GASES["tnt"].density, rel=1e-14)  # kg/m
-    assert info["kb_burst"] is None and info["remap_share"] == 1.0
-    assert info["remap_radius"] < 0.3  # the disturbed disc is inside the grid
+        assert abs(getattr(info, key)) < 1e-12, key  # round-off (the remap's exact targets)
+    assert info.charge_mass == pytest.approx(np.pi * 0.05**2 * GASES["tnt"].density, rel=1e-14)  # kg/m
+    assert info.kb_burst is None and info.remap_share == 1.0
+    assert info.remap_radius < 0.3  # the disturbed disc is inside the grid
     # products stay where the 1D solution put them: the grid holds the charge's products mass per metre
     U = np.asarray(res.state.U)[0]
-    assert float(np.sum(U[0]) * 0.01**2) == pytest.approx(info["charge_mass"], rel=1e-12)
+    assert float(np.sum(U[0]) * 0.01**2) == pytest.approx(info.charge_mass, rel=1e-12)
     # closed until the blast reaches an outflow face: the edge cells are still the ambient air at rest
     f = res.fields()
     edge = np.ones((60, 60), bool)
@@ -245,13 +247,13 @@ def test_half_cylinder_on_a_wall_with_the_automatic_remap_time():
     data["boundaries"] = {"y": ["wall", "outflow"]}
     setup = pe.build(parse(data))
     info = setup.charge
-    assert info["remap_share"] == 0.5  # the wall through the centre mirrors the other half
-    assert info["charge_mass"] == pytest.approx(0.5 * np.pi * 0.05**2 * GASES["tnt"].density, rel=1e-14)
-    assert info["kb_burst"] is None
-    assert abs(info["remap_mass_error"]) < 1e-12 and abs(info["remap_energy_error"]) < 1e-12
+    assert info.remap_share == 0.5  # the wall through the centre mirrors the other half
+    assert info.charge_mass == pytest.approx(0.5 * np.pi * 0.05**2 * GASES["tnt"].density, rel=1e-14)
+    assert info.kb_burst is None
+    assert abs(info.remap_mass_error) < 1e-12 and abs(info.remap_energy_error) < 1e-12
     # R_lim: the side faces x = +-0.3, the nearest open faces, less margin_cells = 3 cells
-    assert info["limit_radius"] == pytest.approx(0.3 - 3 * 0.01, rel=1e-12)
-    assert info["limit_radius"] < info["remap_radius"] < 0.3
+    assert info.limit_radius == pytest.approx(0.3 - 3 * 0.01, rel=1e-12)
+    assert info.limit_radius < info.remap_radius < 0.3
     # remapped when the 1D blast's overpressure (arrival_fraction 1 % of p0) reaches R_lim: the
     # outermost cell centre above that level lies within (sqrt(2) dx + s)/2 (a cell's radial half
     # extent, s = dx/4 the sub-cell) plus half the 1D zone there (w = 2.3 cm: 12.5 mm growing by 5 %
@@ -260,11 +262,11 @@ def test_half_cylinder_on_a_wall_with_the_automatic_remap_time():
     mesh = np.meshgrid(*[0.5 * (e[1:] + e[:-1]) for e in (np.linspace(-0.3, 0.3, 61),) * 2], indexing="ij")
     r = np.hypot(mesh[0], mesh[1] + 0.3)
     r_front = r[setup.pressure - p0 > 0.01 * p0].max()
-    print(f"1 % overpressure front {r_front:.4f} m, R_lim {info['limit_radius']:.4f} m")
-    assert abs(r_front - info["limit_radius"]) < 2 * 0.01
+    print(f"1 % overpressure front {r_front:.4f} m, R_lim {info.limit_radius:.4f} m")
+    assert abs(r_front - info.limit_radius) < 2 * 0.01
     # the products sit on the wall: the half-disc holds the half-cylinder's products (per metre)
     prod = setup.alpha[0] * setup.rho_k[0] * 0.01**2
-    assert float(np.sum(prod)) == pytest.approx(info["charge_mass"], rel=1e-12)
+    assert float(np.sum(prod)) == pytest.approx(info.charge_mass, rel=1e-12)
 
 
 def test_bad_plane_charge_is_refused():

@@ -6,7 +6,7 @@ import pytest
 
 import blastfsi
 from blastfsi.detonation import remap as rm
-from blastfsi.detonation.charge import run_1d
+from blastfsi.detonation.charge import one_d_scenario
 from blastfsi.euler.boundaries import blast_rows
 from blastfsi.euler.config import BlastTable
 from blastfsi.materials.gases import GASES
@@ -120,8 +120,8 @@ def test_blast_face_reproduces_the_1d_blast_inside_the_domain(geometry):
     res = blastfsi.run(data)
     g = res.summary["gauges"][0]
     r = float(np.linalg.norm(gauge))
-    one = run_1d("tnt", res.setups[0].charge["charge_radius"], CELLS_1D, AIR_RATIO, 1.5, 5e-4, GAS, [r],
-                 history_samples=2001)
+    one = blastfsi.run(one_d_scenario("tnt", res.setups[0].charge.charge_radius, CELLS_1D, AIR_RATIO, 1.5, 5e-4,
+                                      GAS, [r], history_samples=2001))
     g1 = one.summary["gauges"][0]
     c0 = np.sqrt(AIR.gamma * AIR.pressure / AIR.density)
     S = c0 * np.sqrt(1.0 + (AIR.gamma + 1.0) / (2.0 * AIR.gamma) * g1["peak_overpressure"] / AIR.pressure)

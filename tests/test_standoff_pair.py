@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import blastfsi
-from blastfsi.detonation.charge import run_1d
+from blastfsi.detonation.charge import one_d_scenario
 from blastfsi.materials.gases import GASES
 
 AIR = GASES["air"]
@@ -35,8 +35,8 @@ def spherical(lower, initial):
 def test_standoff_and_full_domain_carry_the_same_incident_wave():
     charge = {"kind": "charge", "mass": MASS, "cells": CELLS_1D, "air_ratio": AIR_RATIO, "center": [0.0]}
     so = blastfsi.run(spherical(D - L, charge))
-    radius = so.setups[0].charge["charge_radius"]
-    one = run_1d("tnt", radius, CELLS_1D, AIR_RATIO, 1.5, T_END, GAS, [D - L, D - 0.5 * DX])
+    radius = so.setups[0].charge.charge_radius
+    one = blastfsi.run(one_d_scenario("tnt", radius, CELLS_1D, AIR_RATIO, 1.5, T_END, GAS, [D - L, D - 0.5 * DX]))
     at_face, at_gauge = one.summary["gauges"]
     full = blastfsi.run(spherical(0.0, charge | {"remap_time": at_face["arrival_time"]}))
     gauges = (so.summary["gauges"][0], full.summary["gauges"][0], at_gauge)

@@ -1,6 +1,7 @@
 """What the terminal shows: the stage lines and the progress on stderr, the summary table on stdout (or one
 JSON object with --json), and `blastfsi schema`."""
 import json
+import logging
 import math
 import os
 import pty
@@ -13,8 +14,10 @@ import jsonschema
 import pytest
 import tomli_w
 
+import blastfsi.method
 from blastfsi import cli, report, simulation
 from blastfsi.api import example_data, example_names
+from blastfsi.scenario import parse
 
 # a charge in a 1D spherical euler domain: the 1D detonation to the remap, the euler loop (cheap to compile)
 CHARGE = {"method": "euler", "name": "t-charge",
@@ -101,6 +104,15 @@ def charge_run(tmp_path_factory):
                            str(folder / "out"), "--json"], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     return proc, folder / "out"
+
+
+def test_a_charge_set_up_logs_its_1d_detonation(caplog):
+    """Without a progress report (the Python API's default) the set-up's stage goes to the ``blastfsi``
+    logger; the driver shows the same line as a stage when it reports (next test)."""
+    with caplog.at_level(logging.INFO, logger="blastfsi"):
+        blastfsi.method.get("euler").build(parse(CHARGE))
+    assert [(r.name, r.getMessage()) for r in caplog.records] == [
+        ("blastfsi.detonation.charge", "1D detonation of 0.1 kg TNT to t = 0.02 ms (30 zones across the charge radius)")]
 
 
 def test_charge_run_says_what_it_does_in_order_on_stderr(charge_run):

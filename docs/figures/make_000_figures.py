@@ -93,7 +93,7 @@ def _restored(folder: Path, name: str, time: float | None):
         state = simulation._restore(folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5", state, fit)
         static = method.static(setup, scs[0])
     scalars = (20_000, sc.time.end / (n - 1), sc.time.dt_min_fraction)
-    advance, _ = simulation.compiled_advance(method, static, state, params, sc.time.end, *scalars)
+    advance, _ = methods.compiled_advance(method, static, state, params, sc.time.end, *scalars)
     return method, setup, advance, state, params, scalars
 
 
@@ -172,7 +172,7 @@ def reference_1d(t0: float, window_end: float, zones=(1600, 3200)) -> list[dict]
     the blast at r = 125 mm (both gauges) before the slab's reflection: peak and arrival over the incident
     pulse window, at two zonings (finer ones fail at the burn front, docs/verification.md)."""
     from blastfsi import api
-    from blastfsi.detonation.charge import _ambient, run_1d
+    from blastfsi.detonation.charge import _ambient, one_d_scenario
     from blastfsi.scenario import parse
 
     sc = parse(api.example_data("he-slab-2d"))  # the shipped charge, ambient air and gauges
@@ -182,8 +182,8 @@ def reference_1d(t0: float, window_end: float, zones=(1600, 3200)) -> list[dict]
     out = []
     for n in zones:
         # air zones 100 h wide (1.6 mm at 3200 zones), as the reference was measured
-        res = run_1d(sc.initial.explosive, sc.initial.radius, n, 100.0, 0.5, t0 + window_end, gas, [r],
-                     sc.output.arrival_fraction, j=1)
+        res = api.run(one_d_scenario(sc.initial.explosive, sc.initial.radius, n, 100.0, 0.5, t0 + window_end, gas,
+                                     [r], sc.output.arrival_fraction, j=1))
         g = res.summary["gauges"][0]
         out.append({"zones": n, "peak_overpressure": g["peak_overpressure"], "arrival_time": g["arrival_time"]})
     return out

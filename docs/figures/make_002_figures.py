@@ -92,7 +92,7 @@ def fig5(cells=1000):
         theory = np.array([s["impulse_ratio_theory"] for s in summ])
         qs = []
         for s, setup in zip(summ, res.setups[i * len(betas):(i + 1) * len(betas)]):
-            m, ti = setup.info["plate_areal_mass"], setup.info["duration"]
+            m, ti = setup.theory.plate_areal_mass, setup.theory.duration
             v = shock.quasi_steady_plate(r * P0, ti, m, P0, RHO0)
             qs.append(m * v / (s["reflection_coefficient_theory"] * r * P0 * ti))
         qs = np.array(qs)

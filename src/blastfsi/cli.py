@@ -17,6 +17,7 @@ from blastfsi import api, report
 from blastfsi.api import example_data, example_names
 from blastfsi.io.results import OutputError
 from blastfsi.scenario import ScenarioError, apply_overrides, parse, read_toml
+from blastfsi.simulation import RunInterrupted, SimulationError
 
 EXIT_SCENARIO, EXIT_SIMULATION, EXIT_OUTPUT, EXIT_INTERRUPTED = 2, 3, 4, 130
 
@@ -101,8 +102,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args) -> int:
-    from blastfsi.simulation import RunInterrupted, SimulationError
-
     progress = not args.quiet
     try:
         if args.restart:

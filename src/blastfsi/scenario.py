@@ -34,6 +34,9 @@ from typing import Annotated, Any, ClassVar, Literal, NamedTuple, Optional, Unio
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from blastfsi import method as methods
+from blastfsi.materials import MaterialError, lookup
+
 DEFAULT_METHOD = "lagrangian1d"
 SAFE_NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]*")
 
@@ -368,10 +371,18 @@ def check_resources(sc: ScenarioBase, members: int | None = None) -> None:
                             f"{sc.numerics.precision}) and this machine has {_gib(have)}; reduce it, {insist}")
 
 
+def material(overrides: dict, name: str, field: str):
+    """The library material ``name`` with the scenario's ``[materials.<name>]`` overrides (``overrides``:
+    the ``materials`` table) applied and checked (:func:`blastfsi.materials.lookup`); ScenarioError naming
+    ``field`` for an unknown material or an override out of range."""
+    try:
+        return lookup(name, overrides.get(name), field=field)
+    except MaterialError as err:
+        raise ScenarioError(str(err)) from None
+
+
 def parse(data: dict) -> ScenarioBase:
     """Validate a raw scenario dict with the model of its ``method``, then its resources (:func:`check_resources`)."""
-    from blastfsi import method as methods
-
     if not isinstance(data, dict):
         raise ScenarioError(f"a scenario is a table of keys, got {type(data).__name__}")
     check_depth(data)
@@ -382,6 +393,8 @@ def parse(data: dict) -> ScenarioBase:
         model = methods.get(name).scenario_model
     except KeyError as err:
         raise ScenarioError(f"invalid scenario:\n  method: {err.args[0]}") from None
+    if not issubclass(model, ScenarioBase):
+        raise TypeError(f"method {name!r}: scenario_model must derive from blastfsi.scenario.ScenarioBase")
     sc = validate_model(model, {**data, "method": name})
     check_resources(sc)
     return sc

@@ -24,7 +24,8 @@ was enlarged and the time loop compiled again.
 """
 from __future__ import annotations
 
-import contextvars
+import contextlib
+import logging
 import re
 import signal
 import sys
@@ -168,36 +169,6 @@ def _snapped(t: float, times: list[float], tol: float) -> float:
     return next((s for s in times if abs(s - t) <= tol), t)
 
 
-_EXECUTABLES: dict = {}  # (method, static, argument types) -> compiled jit(vmap(advance)), or jit(advance) for one member
-
-
-def compiled_advance(method: methods.Method, static, state, params, *scalars):
-    """The compiled batched ``advance`` for these argument types, and the
-    seconds spent compiling it now (0 when it was compiled before)."""
-    leaves, tree = jax.tree_util.tree_flatten((state, params))
-    key = (method.name, static, tree, tuple(jax.typeof(x) for x in leaves), tuple(type(s) for s in scalars),
-           jax.config.jax_enable_x64)  # (the scalars' compiled types)
-    if key in _EXECUTABLES:
-        return _EXECUTABLES[key], 0.0
-
-    def one(st, pa, t_stop, max_steps, sample_interval, dt_floor_fraction):
-        return method.advance(st, pa, static, t_stop, max_steps, sample_interval, dt_floor_fraction)
-
-    def single(st, pa, *rest):
-        # a batch of one runs unbatched: under vmap every lax.cond of the loop (a sample due, a fault, a
-        # coupled step or not) becomes a select that evaluates both branches each step; measured on
-        # he-slab-2d at 20 us: 245 ms per coupled step batched, 105 ms unbatched
-        out = one(*jax.tree_util.tree_map(lambda a: a[0], (st, pa)), *rest)
-        return jax.tree_util.tree_map(lambda a: a[None], out)
-
-    members = leaves[0].shape[0]
-    batched = single if members == 1 else jax.vmap(one, in_axes=(0, 0, None, None, None, None))
-    started = wallclock.perf_counter()
-    _EXECUTABLES[key] = runtime.lowered(batched, (state, params, *scalars), ("advance", method.name, static, members),
-                                        donate_argnums=(0,)).compile()
-    return _EXECUTABLES[key], wallclock.perf_counter() - started
-
-
 def _leaf_names(tree) -> list[tuple[str, object]]:
     return [(jax.tree_util.keystr(p).lstrip("."), leaf) for p, leaf in jax.tree_util.tree_flatten_with_path(tree)[0]]
 
@@ -270,20 +241,17 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     ``restart``, ``out`` is an existing results directory whose latest readable
     checkpoint is continued; ``out=None`` writes nothing. Ctrl-C while writing
     ``out`` raises :class:`RunInterrupted` once the run is saved. With ``progress`` it says on
-    stderr what it is doing (:class:`_Progress`; set-up code adds lines with :func:`announce`). The run computes in
+    stderr what it is doing (:class:`_Progress`; the set-up's own ``logging`` messages of level INFO and above under
+    the ``blastfsi`` logger, e.g. a charge's 1D detonation, are shown as stage lines). The run computes in
     ``numerics.precision`` and keeps its compiled time loop in the persistent cache
     (:mod:`blastfsi.runtime`)."""
     bar = _Progress(progress)
-    reporting = _REPORTING.set(bar) if progress else None  # (a nested run, e.g. a charge's 1D detonation, is silent)
-    try:
+    with bar.logged():
         bar.stage("validating the scenario")
         sc, members, member_scs = expand(data)
         with runtime.precision(sc.numerics.precision), runtime.compilation_cache():  # (both restored after the run)
             return _run(sc, members, member_scs, out, overwrite=overwrite, bar=bar, restart=restart,
                         chunk_steps=chunk_steps)
-    finally:
-        if reporting is not None:
-            _REPORTING.reset(reporting)
 
 
 def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | None, *, overwrite: bool,
@@ -326,7 +294,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
         #                                               stops before the first chunk)
         bar.stage(f"compiling the time loop ({setups[0].cells} cells" + (f" x {len(setups)} members)" if
                                                                          len(setups) > 1 else ")"))
-        advance, compile_time = compiled_advance(method, static, state, params, stops[-1], *scalars)
+        advance, compile_time = methods.compiled_advance(method, static, state, params, stops[-1], *scalars)
         bar.stage(f"compiled in {report.duration(compile_time)}" if compile_time else
                   "time loop compiled earlier in this process: reused")
         bar.start(sc.time.end, t_start, int(np.max(np.asarray(state.step))))
@@ -373,7 +341,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
                         bar.stage(f"t = {report.quantity(float(np.min(np.asarray(state.t))), 's')}: particle pool "
                                   f"full, grown to {_pool_size(method, state)} slots (compiling the time loop again)")
                         static = method.static(setups[0], member_scs[0])
-                        advance, more = compiled_advance(method, static, state, params, stops[-1], *scalars)
+                        advance, more = methods.compiled_advance(method, static, state, params, stops[-1], *scalars)
                         compile_time += more
                         grow_compile += more
                         growths += 1
@@ -555,7 +523,7 @@ class _CtrlC:
 
 class _Progress:
     """What a run says on stderr when ``enabled`` (silent otherwise): stage lines with the wall-clock time
-    since it started (:meth:`stage`, also :func:`announce`), then from :meth:`start` to :meth:`finish` the
+    since it started (:meth:`stage`, and the set-up's log messages: :meth:`logged`), then from :meth:`start` to :meth:`finish` the
     progress after each call of the time loop: simulated time, step, the time step (the mean over the call,
     the stable one: :func:`blastfsi.report.shown_step`), steps per second and the ETA from the
     simulated-time rate, both averaged over the last ~20 s of wall-clock time
@@ -617,14 +585,34 @@ class _Progress:
             self._bar.stop()
             self._bar = None
 
+    @contextlib.contextmanager
+    def logged(self):
+        """Context of a run: when enabled, the messages of the ``blastfsi`` loggers (level INFO and above; the
+        set-up's, e.g. a charge's 1D detonation) are stage lines; the logger's level is restored after."""
+        if not self.enabled:
+            yield
+            return
+        logger, handler = logging.getLogger(LOGGER), _StageLines(self)
+        level = logger.level
+        logger.addHandler(handler)
+        if logger.getEffectiveLevel() > logging.INFO:
+            logger.setLevel(logging.INFO)
+        try:
+            yield
+        finally:
+            logger.removeHandler(handler)
+            logger.setLevel(level)
 
-_REPORTING: contextvars.ContextVar[_Progress | None] = contextvars.ContextVar("blastfsi_reporting", default=None)
+
+LOGGER = "blastfsi"  # the package's loggers are its module names (logging.getLogger(__name__))
 
 
-def announce(message: str) -> None:
-    """Say on stderr, as a stage of the run in progress, what its set-up is doing now (e.g. the 1D
-    detonation of a charge, which may take a minute): a line with the elapsed wall-clock time; nothing when
-    no run reports its progress (:func:`run` with ``progress=False``, the Python API's default)."""
-    bar = _REPORTING.get()
-    if bar is not None:
-        bar.stage(message)
+class _StageLines(logging.Handler):
+    """A log record as a stage line of a run's progress."""
+
+    def __init__(self, progress: _Progress):
+        super().__init__(logging.INFO)
+        self._progress = progress
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self._progress.stage(record.getMessage())

@@ -35,9 +35,9 @@ def one_d_state(sc, info):
     """The 1D spherical lagrangian1d solution at the remap time, rerun with the arguments
     :func:`blastfsi.detonation.charge.charge_initial` uses (deterministic: the same state)."""
     gas = {"gamma": AIR.gamma, "pressure": AIR.pressure, "density": AIR.density}
-    length = 1.5 * info["limit_radius"] + 10.0 * info["charge_radius"]
-    return charge.run_1d(sc.initial.explosive, info["charge_radius"], sc.initial.cells, sc.initial.air_ratio, length,
-                         info["remap_time"], gas)
+    length = 1.5 * info.limit_radius + 10.0 * info.charge_radius
+    return blastfsi.run(charge.one_d_scenario(sc.initial.explosive, info.charge_radius, sc.initial.cells,
+                                              sc.initial.air_ratio, length, info.remap_time, gas))
 
 
 def cell_distance_bounds(g, centre):
@@ -52,26 +52,26 @@ def test_axisym_remap_conserves_mass_and_keeps_products_in_the_fireball():
     # tiny grid (60 x 30 cells, dx = 10 cm), a coarse 1D run (40 zones across the charge) remapped at 0.2 ms
     sc, setup = euler_setup("tnt-free-air-axisym", {"grid.cells": 60, "initial.cells": 40, "initial.remap_time": 2e-4})
     info, g = setup.charge, setup.grid
-    share = info["remap_share"]
+    share = info.remap_share
     assert share == 0.5  # the symmetry plane z = 0 through the centre
     vol = cell_volumes(g)
     alpha = setup.alpha[0]  # products volume fraction
     products = alpha * setup.rho_k[0] * vol
     mass = products + (1.0 - alpha) * setup.rho_k[1] * vol
     # every kg of products of the 1D run (the whole charge) is on the grid, halved by the symmetry plane
-    assert products.sum() == pytest.approx(share * info["charge_mass"], rel=1e-12)
+    assert products.sum() == pytest.approx(share * info.charge_mass, rel=1e-12)
     # mass: the ambient air of the domain plus the 1D mass inside the remapped ball, less the ambient
     # air the ball displaces -- what the 1D solution holds, summed from its own zones
     f = one_d_state(sc, info).fields()
     edges, rho_1d = np.asarray(f["node_x"]), np.asarray(f["density"])
-    inside = edges[1:] <= info["remap_radius"] * (1 + 1e-12)
+    inside = edges[1:] <= info.remap_radius * (1 + 1e-12)
     m_ball = np.sum(rho_1d[inside] * 4.0 / 3.0 * np.pi * np.diff(edges**3)[inside])
     v_ball = 4.0 / 3.0 * np.pi * edges[1:][inside][-1] ** 3
     assert mass.sum() == pytest.approx(AIR.density * (vol.sum() - share * v_ball) + share * m_ball, rel=1e-12)
     # products only inside the fireball (the 1D products/air interface r_c), to within one cell; cells
     # wholly inside it are pure products
     r_c = edges[np.count_nonzero(f["products_fraction"])]
-    near, far = cell_distance_bounds(g, info["charge_center"])
+    near, far = cell_distance_bounds(g, info.charge_center)
     assert np.all(products[near > r_c + g.dx] == 0.0)
     assert np.all(alpha[far < r_c - g.dx] == 1.0)
     assert np.count_nonzero(alpha) < 0.05 * alpha.size  # the bug filled the whole grid with products

@@ -453,8 +453,8 @@ class Cfdmp:
         baseline = np.asarray(state.baseline)
         out = {"scheme": sc.numerics.scheme, "materials": list(e.materials), "mpm_materials": list(setup.materials),
                "dx": e.grid.dx, "bridge_cells": setup.coupling.bridge_cells,
-               **({"remap_time": e.charge["remap_time"], "one_d_air_zone": e.charge["one_d_air_zone"]}
-                  if e.charge else {}),
+               **({"remap_time": e.charge.remap_time, "one_d_air_zone": e.charge.one_d_air_zone}
+                  if e.charge is not None else {}),
                "coupled_faces": list(setup.coupling.coupled_faces),
                "activation_time": float(hist["time"][np.argmax(coupled)]) if coupled.any() else None,
                "particles": int(np.asarray(state.mpm.particles.active).sum()), "capacity": setup.capacity,

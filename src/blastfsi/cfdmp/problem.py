@@ -32,7 +32,6 @@ from blastfsi.euler import geometry
 from blastfsi.euler.config import Config as EulerConfig
 from blastfsi.euler.method import GEOMETRY_CODE
 from blastfsi.euler.scenario import gas_materials
-from blastfsi.materials import MaterialError, lookup
 from blastfsi.euler import problem as euler_problem
 from blastfsi.mpm import problem as mpm_problem
 from blastfsi.scenario import AXES, ScenarioError
@@ -226,12 +225,8 @@ def build(sc: CfdmpScenario) -> Setup:
 
     # gases: the Eulerian materials as fluid particles
     gas_material = []
-    for name in esetup.materials:
+    for name, mat in zip(esetup.materials, esetup.gases):
         if name not in names:
-            try:
-                mat = lookup(name, sc.materials.get(name), field=f"materials.{name}")
-            except MaterialError as err:
-                raise ScenarioError(str(err)) from None
             model = get_model(mpm_problem.model_name(mat))
             names.append(name)
             models.append(model)

@@ -1,10 +1,11 @@
 """The ``charge`` initial condition of the euler method: the 1D detonation on
-``lagrangian1d`` (through the same driver, nothing written) run to the remap
-time, remapped conservatively by :mod:`blastfsi.detonation.remap`. The 1D run is
+``lagrangian1d`` (:class:`Detonation1D`: that method's own set-up and compiled time
+loop, nothing written) run to the remap time, remapped conservatively by
+:mod:`blastfsi.detonation.remap`. The 1D run is
 spherical (j = 2) for 1D spherical, r-z and 3D Cartesian domains, and cylindrical
 (j = 1) for 2D Cartesian (plane x-y) domains, where the charge is an infinitely
 long cylinder along z: ``initial.mass`` is then per metre of its length [kg/m],
-and so is ``info["charge_mass"]``.
+and so is :attr:`ChargeRemap.charge_mass`.
 
 Remap time: ``initial.remap_time``, or automatically the arrival time
 (threshold ``output.arrival_fraction`` p0) of the 1D blast at the limit radius
@@ -20,7 +21,7 @@ Hemisphere (a surface burst, KB "surface"): its centre lies on a wall/symmetry
 face; the 1D run is a sphere of twice the mass, of which the domain holds half.
 In 2D Cartesian, likewise a half cylinder lying on a wall/symmetry face.
 
-One time axis: the euler (and cfdmp) run starts at the remap time (``info["remap_time"]``),
+One time axis: the euler (and cfdmp) run starts at the remap time (:attr:`ChargeRemap.remap_time`),
 so its history, gauges, snapshots and ``time.end`` all count from the detonation; ``time.end``
 must lie after the remap time.
 
@@ -37,63 +38,88 @@ shock reaches its open outer end after the remap time, and the rarefaction that 
 runs inward at c - u, below c0 in shocked air (u grows faster than c) and near c0 in the weak
 negative phase, so it cannot reach the layer before ``time.end`` (margin 1.5).
 
-Kingery-Bulmash (``info["kb_burst"]``: "free-air" or "surface") holds for
+Kingery-Bulmash (:attr:`ChargeRemap.kb_burst`: "free-air" or "surface") holds for
 spherical TNT charges only; for a cylinder it is None (no KB comparison).
 """
 from __future__ import annotations
 
+import logging
+from dataclasses import dataclass
 from typing import NamedTuple
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
+from blastfsi import method as methods
+from blastfsi import runtime
 from blastfsi.detonation import remap as rm
 from blastfsi.euler.config import MIN_CELLS
 from blastfsi.euler.scenario import faces_toward
 from blastfsi.exact import kingery_bulmash as kb
-from blastfsi.scenario import AXES
-from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
 from blastfsi.lagrangian1d.charge_problem import EXPLOSIVES, charge_mass, charge_radius
-from blastfsi.scenario import ScenarioError
+from blastfsi.lagrangian1d.method import METHOD as LAGRANGIAN1D
+from blastfsi.scenario import AXES, ScenarioError, material, parse
+from blastfsi.timeloop import FAULT_MESSAGES
 
 EULER_GEOMETRIES = ("spherical", "axisymmetric", "cartesian")
 GEOMETRY_1D = {1: "cylindrical", 2: "spherical"}  # lagrangian1d domain.geometry of exponent j
 LAYER = MIN_CELLS  # cells of the blast layer along a blast face: the ghost depth of the schemes
 TABLE_ROWS = 5  # products and air partial densities, radial momentum, total energy, products fraction
+STEPS_PER_CALL = 20_000  # steps of one call of the 1D time loop (between the fault checks)
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ChargeRemap:
+    """What the charge initial condition did (the 1D detonation and its remap), for the summary (SI units)."""
+
+    remap_time: float  # [s] the 1D detonation's time at the remap, counted from the detonation
+    remap_radius: float  # [m] the disturbed radius of the 1D blast then (remapped out to it)
+    limit_radius: float  # [m] R_lim (module docstring)
+    charge_radius: float  # [m]
+    charge_mass: float  # [kg] the charge in the domain (half of the 1D sphere for a hemisphere; kg/m for j = 1)
+    charge_center: tuple  # [m] its centre (ndim coordinates)
+    kb_burst: str | None  # "free-air", "surface" (a hemisphere) or None (a 2D cylinder: no Kingery-Bulmash)
+    one_d_zones: int  # zones of the 1D run
+    one_d_air_zone: float  # [m] width of its air zones
+    remap_share: float  # the fraction of the 1D ball inside the domain (1; 1/2 on a mirror plane ...)
+    remap_mass_error: float | None = None  # relative errors of the remapped mass, products and energy against
+    remap_products_error: float | None = None  # the 1D profile's inside the domain (None: nothing to compare)
+    remap_energy_error: float | None = None
+    blast_table_mb: float | None = None  # a stand-off charge's blast table: its memory [MB], shape (times,
+    blast_table_shape: tuple | None = None  # radii, rows), the layer cells it feeds and the 1D run's length [m];
+    blast_layer_cells: int | None = None  # None without blast faces
+    one_d_length: float | None = None
 
 
 class ChargeFields(NamedTuple):
-    materials: tuple
+    materials: tuple  # names: the explosive, the ambient gas
+    gases: tuple  # their library entries, the scenario's overrides applied
     eos: np.ndarray
     rho_k: np.ndarray
     alpha: np.ndarray  # (n_materials, *shape) volume fractions
     velocity: np.ndarray
     pressure: np.ndarray
     reference_pressure: float
-    info: dict
+    info: ChargeRemap
     blast: dict | None = None  # the blast table (fields of blastfsi.euler.config.BlastTable, NumPy) or None
-
-
-def _material(sc, name: str, key: str):
-    try:
-        return lookup(name, sc.materials.get(name), field=key)
-    except MaterialError as err:
-        raise ScenarioError(str(err)) from None
 
 
 def _explosive(sc) -> JWLExplosive:
     name = sc.initial.explosive
     if name not in GASES or not isinstance(GASES[name], JWLExplosive):
         raise ScenarioError(f"initial.explosive: unknown explosive {name!r}; available: {', '.join(EXPLOSIVES)}")
-    return _material(sc, name, "initial.explosive")
+    return material(sc.materials, name, "initial.explosive")
 
 
 def _ambient(sc):
     amb = sc.initial.ambient
     if amb is None:
-        air = _material(sc, "air", "initial.ambient.material")
+        air = material(sc.materials, "air", "initial.ambient.material")
         return "air", air, air.density, air.pressure
-    mat = _material(sc, amb.material, "initial.ambient.material")
+    mat = material(sc.materials, amb.material, "initial.ambient.material")
     if isinstance(mat, JWLExplosive):
         raise ScenarioError(f"initial.ambient.material: {amb.material!r} is an explosive, not an ambient gas")
     if np.any(np.asarray(amb.velocity) != 0.0):
@@ -136,23 +162,83 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
     return r_lim
 
 
-def run_1d(explosive: str, radius: float, cells: int, air_ratio: float, length: float, t_end: float, gas: dict,
-           gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2, history_samples: int = 2):
-    """The 1D spherical (j = 2) or cylindrical (j = 1) detonation on ``lagrangian1d`` to ``t_end``
-    (a :class:`blastfsi.simulation.Result`): ``cells`` zones across the charge radius, then uniform air
-    zones ``air_ratio`` times as wide; ``history_samples`` rows of history (gauge overpressures)."""
-    from blastfsi import simulation
-
-    data = {"method": "lagrangian1d", "name": "charge-1d", "charge": {"explosive": explosive, "radius": radius},
+def one_d_scenario(explosive: str, radius: float, cells: int, air_ratio: float, length: float, t_end: float,
+                   gas: dict, gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2,
+                   history_samples: int = 2) -> dict:
+    """The ``lagrangian1d`` scenario of a charge's 1D detonation (:class:`Detonation1D`; ``blastfsi.run``
+    runs it with a summary and history): a spherical (j = 2) or cylindrical (j = 1) charge of ``radius`` with
+    ``cells`` zones across it, then uniform air zones ``air_ratio`` times as wide to ``length``, to
+    ``t_end``, gauges at the radii ``gauges``, ``history_samples`` rows of history."""
+    return {"method": LAGRANGIAN1D.name, "name": "charge-1d", "charge": {"explosive": explosive, "radius": radius},
             "domain": {"geometry": GEOMETRY_1D[j], "length": length},
             "grid": {"cells": cells, "first_ratio": air_ratio, "max_ratio": air_ratio},
             "gas": gas, "time": {"end": t_end},
             "output": {"history_samples": history_samples, "fields": 0, "plots": False, "gauges": gauges or [],
                        "arrival_fraction": arrival_fraction}}
-    simulation.announce(f"1D detonation of {charge_mass(radius, GASES[explosive].density, j):.4g} "
-                        f"{'kg/m' if j == 1 else 'kg'} {explosive.upper()} to t = {t_end * 1e3:.4g} ms "
-                        f"({cells} zones across the charge radius)")
-    return simulation.run(data)
+
+
+class Detonation1D:
+    """A charge's 1D detonation (``data``: :func:`one_d_scenario`), built and advanced here with the
+    ``lagrangian1d`` method's own face and compiled time loop (:func:`blastfsi.method.compiled_advance`), not
+    through the driver: nothing is written, one log line says what runs. It computes in float64 whatever the
+    multi-D run's precision (the remap and the blast table are taken from it)."""
+
+    def __init__(self, data: dict):
+        with runtime.precision("float64"):
+            self.scenario = parse(data)
+            self.setup = LAGRANGIAN1D.build(self.scenario)
+            self.static = LAGRANGIAN1D.static(self.setup, self.scenario)
+            self.state = jax.tree_util.tree_map(  # (a batch of one member: the compiled loop's layout)
+                lambda a: jnp.asarray(a)[None],
+                LAGRANGIAN1D.initial_state(self.setup, self.scenario, self.scenario.output.history_samples,
+                                           jnp.float64))
+            self.params = jax.tree_util.tree_map(lambda a: jnp.asarray(a)[None],
+                                                 LAGRANGIAN1D.params(self.setup, jnp.float64))
+
+    @property
+    def t(self) -> float:
+        return float(np.asarray(self.state.t)[0])
+
+    def advance_to(self, t_end: float) -> None:
+        """Advance to ``t_end`` (ScenarioError on a fault or an exhausted step budget)."""
+        if self.t == 0.0:
+            ch = self.scenario.charge
+            mass = charge_mass(ch.radius, GASES[ch.explosive].density, self.setup.geometry)
+            log.info(f"1D detonation of {mass:.4g} {'kg/m' if self.setup.geometry == 1 else 'kg'} "
+                     f"{ch.explosive.upper()} to t = "
+                     f"{t_end * 1e3:.4g} ms ({self.setup.explosive_zones} zones across the charge radius)")
+        time = self.scenario.time
+        scalars = (STEPS_PER_CALL, time.end / (self.scenario.output.history_samples - 1),
+                   time.dt_min_fraction)  # (as the driver's: history samples from 0 to time.end)
+        with runtime.precision("float64"):
+            advance, _ = methods.compiled_advance(LAGRANGIAN1D, self.static, self.state, self.params, t_end,
+                                                  *scalars)
+            while self.t < t_end:
+                steps = int(np.asarray(self.state.step)[0])
+                if steps >= time.max_steps:
+                    raise ScenarioError(f"the 1D detonation of the charge took time.max_steps = {time.max_steps} "
+                                        f"steps before t = {t_end:.4g} s")
+                self.state = advance(self.state, self.params, t_end, min(STEPS_PER_CALL, time.max_steps - steps),
+                                     *scalars[1:])
+                fault = int(np.asarray(self.state.fault)[0])
+                if fault != 0:
+                    raise ScenarioError(f"the 1D detonation of the charge failed at t = {self.t:.4g} s: "
+                                        f"{FAULT_MESSAGES.get(fault, f'fault {fault}')}")
+
+    def arrival(self, k: int) -> float | None:
+        """Arrival time [s] of the blast at gauge ``k`` (``arrival_fraction`` p0), None before it."""
+        t = float(np.asarray(self.state.gauge_arrival)[0, k])
+        return t if np.isfinite(t) else None
+
+    def arrays(self) -> dict:
+        """The state's arrays now (NumPy, by field name)."""
+        return {f: np.asarray(v)[0] for f, v in self.state._asdict().items()}
+
+    def profile(self) -> rm.Profile1D:
+        """The conservative 1D profile now (:func:`blastfsi.detonation.remap.profile_from_lagrangian`)."""
+        st = self.arrays()
+        return rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], self.setup.explosive_zones,
+                                          self.setup.geometry)
 
 
 def layer_mask(sc, g) -> np.ndarray:
@@ -209,28 +295,12 @@ def table_plan(sc, g, centre, mask, t_remap: float, speed: float) -> dict:
             "radii": r0 + dr * np.arange(n_r), "times": t_remap + dt * np.arange(n_t), "mb": mb}
 
 
-def blast_table(res, plan: dict, explosive_zones: int, j: int) -> dict:
-    """The table of ``plan``: the 1D run ``res`` (at the remap time) advanced to each of its times."""
-    import jax
-    import jax.numpy as jnp
-
-    from blastfsi import simulation
-
-    method, setup, state = res.method, res.setups[0], res.state
-    static = method.static(setup, res.scenario)
-    dtype = np.asarray(state.t).dtype
-    params = jax.tree_util.tree_map(lambda a: jnp.asarray(a)[None], method.params(setup, dtype))
-    scalars = (20_000, 10.0 * float(plan["times"][-1]), 1e-6)
-    advance, _ = simulation.compiled_advance(method, static, state, params, float(plan["times"][-1]), *scalars)
+def blast_table(one_d: Detonation1D, plan: dict) -> dict:
+    """The table of ``plan``: the 1D run ``one_d`` (at the remap time) advanced to each of its times."""
     rows = np.empty((plan["times"].size, plan["radii"].size, TABLE_ROWS))
     for k, t in enumerate(plan["times"]):
-        while float(np.asarray(state.t)[0]) < t:
-            state = advance(state, params, float(t), *scalars)
-            if int(np.asarray(state.fault)[0]) != 0:
-                raise ScenarioError(f"the 1D blast feeding the blast faces failed at t = {float(state.t[0]):.4g} s")
-        st = {f: np.asarray(v)[0] for f, v in state._asdict().items()}
-        rows[k] = table_rows(rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"],
-                                                        explosive_zones, j), plan["radii"])
+        one_d.advance_to(float(t))
+        rows[k] = table_rows(one_d.profile(), plan["radii"])
     return {key: plan[key] for key in ("cells", "radius", "unit", "t0", "dt")} | {"rows": rows}
 
 
@@ -276,9 +346,10 @@ def charge_initial(sc, g) -> ChargeFields:
     if init.remap_time is None:
         t_remap = None
         for t_probe in probe_times(init.explosive, mass_full, r_lim, c0, radius / hx.detonation_velocity, j):
-            probe = run_1d(init.explosive, radius, init.cells, init.air_ratio, length, t_probe, gas, [r_lim],
-                           sc.output.arrival_fraction, j)
-            t_remap = probe.summary["gauges"][0]["arrival_time"]
+            probe = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length, t_probe,
+                                                gas, [r_lim], sc.output.arrival_fraction, j))
+            probe.advance_to(t_probe)
+            t_remap = probe.arrival(0)
             if t_remap is not None:
                 break
         if t_remap is None:
@@ -294,12 +365,12 @@ def charge_initial(sc, g) -> ChargeFields:
         length = max(length, far + g.dx + 1.5 * c0 * (sc.time.end - t_remap) + 10.0 * radius)
     # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
     # (without a blast layer: the probe's zoning and gauge, the same compiled 1D loop)
-    res = run_1d(init.explosive, radius, init.cells, init.air_ratio, length, max(t_remap, 1e-12), gas, [r_lim],
-                 sc.output.arrival_fraction, j)
-    setup = res.setups[0]
-    st = {k: np.asarray(v)[0] for k, v in res.state._asdict().items()}
-    profile = rm.profile_from_lagrangian(st["x"], st["v"], st["e"], st["zone_mass"], setup.explosive_zones,
-                                         setup.geometry)
+    t_start = max(t_remap, 1e-12)
+    one_d = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length,
+                                        sc.time.end if mask.any() else t_start, gas, [r_lim],
+                                        sc.output.arrival_fraction, j))
+    one_d.advance_to(t_start)
+    setup, profile = one_d.setup, one_d.profile()
     r_dist = rm.disturbed_radius(profile, rho_a, p_a / air.eos_params().omega)
     if r_dist >= 0.99 * length:
         raise ScenarioError(f"initial.remap_time = {t_remap:g} s: the blast has left the 1D domain by then")
@@ -312,22 +383,22 @@ def charge_initial(sc, g) -> ChargeFields:
     eos = np.array([list(hx.eos_params()), list(air.eos_params())], float)
     mass = mass_full * out.share if hemi else mass_full
     kb_burst = None if j == 1 else "surface" if hemi else "free-air"
-    info = {"remap_time": float(t_remap), "remap_radius": float(r_dist), "limit_radius": float(r_lim),
-            "charge_radius": float(radius), "charge_mass": float(mass), "charge_center": centre.tolist(),
-            "kb_burst": kb_burst, "one_d_zones": int(setup.cells),
-            "one_d_air_zone": float(init.air_ratio * radius / init.cells),
-            "remap_share": out.share}
-    if out.targets is not None:
-        info.update(remap_mass_error=float(np.sum(out.mass) / out.targets[0] - 1.0),
-                    remap_products_error=float(np.sum(out.products) / out.targets[1] - 1.0),
-                    remap_energy_error=float(np.sum(out.energy) / out.targets[2] - 1.0))
-    table = None
+    errors = {} if out.targets is None else {
+        "remap_mass_error": float(np.sum(out.mass) / out.targets[0] - 1.0),
+        "remap_products_error": float(np.sum(out.products) / out.targets[1] - 1.0),
+        "remap_energy_error": float(np.sum(out.energy) / out.targets[2] - 1.0)}
+    table, layer = None, {}
     if mask.any():
-        speed = shock_speed(st, setup.explosive_zones, j, air.gamma, p_a, rho_a)
+        speed = shock_speed(one_d.arrays(), setup.explosive_zones, j, air.gamma, p_a, rho_a)
         plan = table_plan(sc, g, centre, mask, float(t_remap), speed)
-        table = blast_table(res, plan, setup.explosive_zones, j)
-        info.update(blast_table_mb=plan["mb"], blast_table_shape=list(table["rows"].shape),
-                    blast_layer_cells=int(mask.sum()), one_d_length=float(length))
+        table = blast_table(one_d, plan)
+        layer = {"blast_table_mb": plan["mb"], "blast_table_shape": table["rows"].shape,
+                 "blast_layer_cells": int(mask.sum()), "one_d_length": float(length)}
+    info = ChargeRemap(remap_time=float(t_remap), remap_radius=float(r_dist), limit_radius=float(r_lim),
+                      charge_radius=float(radius), charge_mass=float(mass), charge_center=tuple(centre.tolist()),
+                      kb_burst=kb_burst, one_d_zones=int(setup.cells),
+                      one_d_air_zone=float(init.air_ratio * radius / init.cells), remap_share=out.share,
+                      **errors, **layer)
     alpha = np.stack([out.alpha, 1.0 - out.alpha])  # (n_materials, *shape), the layout of the euler Setup
-    return ChargeFields((init.explosive, air_name), eos, out.rho_k, alpha, out.velocity, out.pressure, float(p_a),
-                        info, table)
+    return ChargeFields((init.explosive, air_name), (hx, air), eos, out.rho_k, alpha, out.velocity, out.pressure,
+                        float(p_a), info, table)

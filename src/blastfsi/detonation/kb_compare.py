@@ -159,13 +159,13 @@ def gauge_references(points, centre, geometry: str, lower, upper, boundaries, dx
     return [infer_reference(p, centre, faces, dx, burst, o) for p, o in zip(points, overrides)]
 
 
-def scenario_references(sc, info: dict, dx: float) -> list[dict]:
-    """The references of the gauges of an euler scenario ``sc`` with a charge of setup ``info``
-    (``charge_center``, ``kb_burst``) on a grid of spacing ``dx``."""
+def scenario_references(sc, centre, burst: str, dx: float) -> list[dict]:
+    """The references of the gauges of an euler scenario ``sc`` with a charge centred at ``centre``, KB
+    ``burst`` ("free-air" or "surface"), on a grid of spacing ``dx``."""
     d = sc.domain
     points = [g if isinstance(g, (list, tuple)) else [g] for g in sc.output.gauges]
-    return gauge_references(points, info["charge_center"], d.geometry, d.lower, d.upper, sc.boundaries, dx,
-                            info["kb_burst"], getattr(sc.output, "gauge_references", None))
+    return gauge_references(points, centre, d.geometry, d.lower, d.upper, sc.boundaries, dx, burst,
+                            getattr(sc.output, "gauge_references", None))
 
 
 def reference_values(tnt_mass: float, distance: float, reference: dict | None = None) -> tuple[dict, list[str]]:

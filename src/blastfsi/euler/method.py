@@ -213,14 +213,14 @@ class Euler:
                 "arrival_time": arrival if np.isfinite(arrival) else None,
                 "positive_phase_duration": (min(end, t) - arrival) if np.isfinite(arrival) else None,
             })
-        if setup.charge and gauges:
-            info = setup.charge
-            if info["kb_burst"] is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
-                r = kb_compare.distances(setup.gauges, info["charge_center"])
-                refs = kb_compare.scenario_references(sc, info, float(setup.grid.dx))  # by position, or set
-                gauges = kb_compare.compare(gauges, r, info["charge_mass"], info["kb_burst"], refs)
-            out.update(charge_mass=info["charge_mass"], remap_time=info["remap_time"],
-                       one_d_air_zone=info["one_d_air_zone"])
+        info = setup.charge
+        if info is not None and gauges:
+            if info.kb_burst is not None:  # KB holds for spherical TNT charges only (None: a 2D cylinder)
+                r = kb_compare.distances(setup.gauges, info.charge_center)
+                refs = kb_compare.scenario_references(sc, info.charge_center, info.kb_burst,
+                                                      float(setup.grid.dx))  # by position, or set
+                gauges = kb_compare.compare(gauges, r, info.charge_mass, info.kb_burst, refs)
+            out.update(charge_mass=info.charge_mass, remap_time=info.remap_time, one_d_air_zone=info.one_d_air_zone)
         out["gauges"] = gauges
         return out
 
@@ -233,13 +233,14 @@ class Euler:
 
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
-            if sc.initial.kind == "charge" and setups[0].charge["kb_burst"] is not None:
+            info = setups[0].charge
+            if info is not None and info.kb_burst is not None:
                 from blastfsi.plotting.kb import kb_gauge_histories
 
-                info = setups[0].charge
-                kb_gauge_histories(folder / "gauges_kb.png", histories[0], sc.output.gauges, info["charge_mass"],
-                                   info["kb_burst"], centre=info["charge_center"],
-                                   references=scenario_references(sc, info, float(setups[0].grid.dx)))
+                kb_gauge_histories(folder / "gauges_kb.png", histories[0], sc.output.gauges, info.charge_mass,
+                                   info.kb_burst, centre=info.charge_center,
+                                   references=scenario_references(sc, info.charge_center, info.kb_burst,
+                                                                  float(setups[0].grid.dx)))
         grid = finals[0]
         labels = ("r", "z") if sc.domain.geometry != "cartesian" else ("x", "y", "z")
         plot_pressure_field(folder / "pressure.png", tuple(e[0] for e in grid.edges), grid.edges[0][1] - grid.edges[0][0],

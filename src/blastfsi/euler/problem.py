@@ -5,16 +5,15 @@ material 0 is the detonation products when there are two; at most two.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from blastfsi.detonation.charge import charge_initial
+from blastfsi.detonation.charge import ChargeRemap, charge_initial
 from blastfsi.euler.config import BlastTable
 from blastfsi.euler.scenario import Boundaries, Domain, EulerOutput, EulerScenario, Grid, Initial
-from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import JWLExplosive
-from blastfsi.scenario import AXES, ScenarioError, Time, cells_along
+from blastfsi.scenario import AXES, ScenarioError, Time, cells_along, material
 
 GEOMETRY_CODE = {"cartesian": 0, "cylindrical": 1, "spherical": 2, "axisymmetric": 1}
 # a blast face is an outflow face to the scheme; its layer of cells is set from the blast table
@@ -67,6 +66,7 @@ class GridGeometry:
 class Setup:
     grid: GridGeometry
     materials: tuple[str, ...]
+    gases: tuple  # the materials' library entries (blastfsi.materials.gases), the scenario's overrides applied
     eos: np.ndarray  # (n_materials, 6) JWL rows
     bc: tuple[tuple[int, int], ...]
     rho_k: np.ndarray  # (n_materials, *shape) phase densities
@@ -79,8 +79,7 @@ class Setup:
     cfl: float  # numerics.cfl
     arrival_fraction: float  # output.arrival_fraction: the overpressure that marks arrival, of the ambient pressure
     start_time: float = 0.0  # the simulated time of the initial state: a charge's remap time (detonation at 0)
-    charge: dict = field(default_factory=dict)  # a charge's 1D detonation and remap, for the summary (JSON);
-    #                                             empty for other initial kinds
+    charge: ChargeRemap | None = None  # a charge's 1D detonation and remap (the summary's); None for other kinds
     blast: BlastTable | None = None  # a stand-off charge's blast table (host arrays), None without blast faces
     devices: int = 1  # devices the grid is split across (numerics.devices, resolved by the euler method)
 
@@ -105,7 +104,7 @@ def boundary_codes(sc: GasPart) -> tuple[tuple[int, int], ...]:
                 raise ScenarioError(f"boundaries.{ax}: 'axis' is allowed only on the lower x face of a radial "
                                     "(cylindrical, spherical, axisymmetric) domain starting at r = 0")
         if radial and sc.domain.lower[0] == 0.0 and lo != "axis":
-            raise ScenarioError(f"boundaries.x: a {sc.domain.geometry} domain starting at r = 0 needs "
+            raise ScenarioError(f"boundaries.x: the {sc.domain.geometry} domain starts at r = 0 and needs "
                                 f"'axis' on its lower face, got {lo!r}")
         if (lo == "periodic") != (hi == "periodic"):
             raise ScenarioError(f"boundaries.{ax}: 'periodic' must be given on both faces, got {[lo, hi]}")
@@ -113,13 +112,6 @@ def boundary_codes(sc: GasPart) -> tuple[tuple[int, int], ...]:
             raise ScenarioError(f"boundaries.{ax}: the radius of a {sc.domain.geometry} domain cannot be periodic")
         out.append((BOUNDARY_CODE[lo], BOUNDARY_CODE[hi]))
     return tuple(out)
-
-
-def _material(sc: GasPart, name: str, key: str):
-    try:
-        return lookup(name, sc.materials.get(name), field=key)
-    except MaterialError as err:
-        raise ScenarioError(str(err)) from None
 
 
 def _velocity(value, ndim: int, key: str) -> np.ndarray:
@@ -166,10 +158,10 @@ def build_gas(sc: GasPart) -> Setup:
     if init.kind == "charge":
         c = charge_initial(sc, g)
         gauges, gauge_cells = _gauges(sc, g)
-        return Setup(grid=g, materials=c.materials, eos=c.eos, bc=bc, rho_k=c.rho_k, alpha=c.alpha,
+        return Setup(grid=g, materials=c.materials, gases=c.gases, eos=c.eos, bc=bc, rho_k=c.rho_k, alpha=c.alpha,
                      velocity=c.velocity, pressure=c.pressure, reference_pressure=c.reference_pressure,
                      gauges=gauges, gauge_cells=gauge_cells, cfl=sc.cfl,
-                     arrival_fraction=sc.output.arrival_fraction, start_time=float(c.info["remap_time"]),
+                     arrival_fraction=sc.output.arrival_fraction, start_time=c.info.remap_time,
                      charge=c.info, blast=None if c.blast is None else BlastTable(**c.blast))
     ndim = g.ndim
     mesh = g.mesh()
@@ -177,7 +169,7 @@ def build_gas(sc: GasPart) -> Setup:
         states = {"initial.left": init.left, "initial.right": init.right}
     else:
         states = {"initial.ambient": init.ambient}
-    mats = {s.material: _material(sc, s.material, f"{key}.material") for key, s in states.items()}
+    mats = {s.material: material(sc.materials, s.material, f"{key}.material") for key, s in states.items()}
     materials = _order([s.material for s in states.values()], mats)
     nm = len(materials)
     shape = g.shape
@@ -215,7 +207,7 @@ def build_gas(sc: GasPart) -> Setup:
         pressure = pressure + _point_energy_pressure(sc, g, centre, mats[amb.material])
     eos = np.array([list(mats[m].eos_params()) for m in materials], float)
     gauges, gauge_cells = _gauges(sc, g)
-    return Setup(grid=g, materials=materials, eos=eos, bc=bc, rho_k=rho_k, alpha=alpha, velocity=velocity,
+    return Setup(grid=g, materials=materials, gases=tuple(mats[m] for m in materials), eos=eos, bc=bc, rho_k=rho_k, alpha=alpha, velocity=velocity,
                  pressure=pressure, reference_pressure=float(p_ref), gauges=gauges, gauge_cells=gauge_cells,
                  cfl=sc.cfl, arrival_fraction=sc.output.arrival_fraction)
 

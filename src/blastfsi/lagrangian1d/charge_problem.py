@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from blastfsi.lagrangian1d.scheme import zone_volume
+from blastfsi.lagrangian1d.scheme import Boundaries, Numerics, zone_volume
 from blastfsi.materials import MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
 from blastfsi.scenario import ScenarioError
@@ -47,23 +47,44 @@ EXPLOSIVES = tuple(sorted(n for n, m in GASES.items() if isinstance(m, JWLExplos
 
 
 @dataclass(frozen=True)
+class ChargeInfo:
+    """The charge and ambient air of a charge run. Amounts "per geometry" are kg (J) for a
+    sphere, per metre of a cylinder, per m^2 of the half slab (planar)."""
+
+    charge_mass: float  # [kg per geometry]
+    charge_radius: float  # R [m]
+    charge_zone_width: float  # h = R / grid.cells, of 000 Eq. (53) [m]
+    detonation_velocity: float  # D [m/s]
+    explosive: str  # material library name
+    explosive_energy: float  # E0 x charge volume [J per geometry]
+    ambient_pressure: float  # [Pa]
+    ambient_density: float  # [kg/m^3]
+    gamma: float  # of the ambient air [-]
+    geometry: str  # "planar", "cylindrical" or "spherical"
+    measure: float  # physical amount per radian^j quantity (MEASURE) [-]
+    plate_areal_mass: float  # [kg/m^2]; 0 without a plate or for a rigid wall
+    afterburn_energy: float  # charge.afterburn_energy x charge volume [J per geometry]
+
+
+@dataclass(frozen=True)
 class Setup:
     """Initial data of a charge run (NumPy, host side); the fields of
-    :class:`blastfsi.lagrangian1d.plate_problem.Setup` plus geometry and per-zone materials."""
+    :class:`blastfsi.lagrangian1d.plate_problem.Setup`, with ``charge`` in place of ``theory``, plus
+    geometry and per-zone materials."""
 
     x: np.ndarray  # node radii (N+1,)
     v: np.ndarray
     e: np.ndarray  # zone specific internal energy (N,)
     zone_mass: np.ndarray  # (N,) kg per radian^j (per m^2 in planar)
-    numerics: tuple  # (gamma, K1, K2, cfl)
-    boundaries: tuple  # (left_velocity, left_pressure, right_mass, right_pressure)
+    numerics: Numerics  # of Python floats
+    boundaries: Boundaries  # of Python floats
     left_velocity_set: bool
     right_fixed: bool
     geometry: int  # j
     zones: tuple  # scheme.Zones fields as NumPy arrays (N,)
     explosive_zones: int  # zones 0 .. explosive_zones-1 hold the explosive
     arrival_fraction: float  # output.arrival_fraction: a gauge's arrival overpressure, of p0
-    info: dict = field(default_factory=dict)
+    charge: ChargeInfo
     gauges: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ambient_pressure: float = 0.0
     afterburn: tuple | None = None  # scheme.Afterburn fields (rate (N,), start, end); None: no afterburning
@@ -162,14 +183,14 @@ def build(sc: Scenario) -> Setup:
                                 "energy is released in burnt products only")
         rate = ch.afterburn_energy / (hx.density * (ch.afterburn_end - ch.afterburn_start))
         afterburn = (np.where(hx_zone, rate, 0.0), ch.afterburn_start, ch.afterburn_end)
-    info = {"charge_mass": mass, "charge_radius": radius, "charge_zone_width": h, "detonation_velocity": D,
-            "explosive": ch.explosive, "explosive_energy": hx.E0 * mass / hx.density,
-            "ambient_pressure": p_a, "ambient_density": rho_a, "gamma": gamma, "geometry": sc.domain.geometry,
-            "measure": MEASURE[j], "plate_areal_mass": right_mass,
-            "afterburn_energy": ch.afterburn_energy * mass / hx.density}
+    charge = ChargeInfo(charge_mass=mass, charge_radius=radius, charge_zone_width=h, detonation_velocity=D,
+                        explosive=ch.explosive, explosive_energy=hx.E0 * mass / hx.density,
+                        ambient_pressure=p_a, ambient_density=rho_a, gamma=gamma, geometry=sc.domain.geometry,
+                        measure=MEASURE[j], plate_areal_mass=right_mass,
+                        afterburn_energy=ch.afterburn_energy * mass / hx.density)
     return Setup(x=x, v=np.zeros_like(x), e=e, zone_mass=rho * zone_volume(x, j),
-                 numerics=(gamma, sc.numerics.K1, sc.numerics.K2, sc.numerics.cfl),
-                 boundaries=(0.0, p_a, right_mass, back), left_velocity_set=True, right_fixed=right_fixed,
-                 geometry=j, zones=zones, explosive_zones=nc, info=info,
+                 numerics=Numerics(gamma, sc.numerics.K1, sc.numerics.K2, sc.numerics.cfl),
+                 boundaries=Boundaries(0.0, p_a, right_mass, back), left_velocity_set=True, right_fixed=right_fixed,
+                 geometry=j, zones=zones, explosive_zones=nc, charge=charge,
                  gauges=np.asarray(sc.output.gauges, float), ambient_pressure=p_a,
                  arrival_fraction=sc.output.arrival_fraction, afterburn=afterburn)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -44,8 +45,8 @@ class Lagrangian1D:
         def arr(values):
             return jnp.asarray(values, dtype)
 
-        return scheme.initial_state(arr(setup.x), arr(setup.v), arr(setup.e), arr(setup.zone_mass), setup.numerics[0],
-                                    n_samples, setup.gauges.size, setup.boundaries[2],
+        return scheme.initial_state(arr(setup.x), arr(setup.v), arr(setup.e), arr(setup.zone_mass),
+                                    setup.numerics.gamma, n_samples, setup.gauges.size, setup.boundaries.right_mass,
                                     zones=_optional(scheme.Zones, setup, "zones", dtype), geometry=_geometry(setup))
 
     def params(self, setup, dtype) -> scheme.Params:
@@ -53,8 +54,8 @@ class Lagrangian1D:
             return jnp.asarray(values, dtype)
 
         threshold = setup.arrival_fraction * setup.ambient_pressure
-        return scheme.Params(num=scheme.Numerics(*map(arr, setup.numerics)),
-                             bc=scheme.Boundaries(*map(arr, setup.boundaries)),
+        return scheme.Params(num=jax.tree_util.tree_map(arr, setup.numerics),
+                             bc=jax.tree_util.tree_map(arr, setup.boundaries),
                              gauges=scheme.Gauges(arr(setup.gauges), arr(setup.ambient_pressure), arr(threshold)),
                              x_right0=arr(setup.x[-1]), zones=_optional(scheme.Zones, setup, "zones", dtype),
                              afterburn=_optional(scheme.Afterburn, setup, "afterburn", dtype))
@@ -71,7 +72,7 @@ class Lagrangian1D:
     def snapshot(self, state: scheme.State, setup) -> Polyline:
         j = _geometry(setup)
         zones = _optional(scheme.Zones, setup, "zones", np.asarray(state.e).dtype)
-        zones = scheme.ideal_gas_zones(setup.numerics[0], state.e.size, state.e.dtype) if zones is None else zones
+        zones = scheme.ideal_gas_zones(setup.numerics.gamma, state.e.size, state.e.dtype) if zones is None else zones
         rho = state.zone_mass / scheme.zone_volume(state.x, j)
         cells = {"density": rho,
                  "pressure": np.asarray(scheme.eos_pressure(rho, state.e, state.t, zones)) + state.q,
@@ -87,7 +88,7 @@ class Lagrangian1D:
         if zone >= 0:
             return (f"zone {zone} at x = {0.5 * (x[zone] + x[zone + 1]):.6g} m "
                     "(NaN, tangled zone or non-positive internal energy)")
-        dt = np.asarray(scheme.zone_dt(np.diff(x), state.a, state.v, scheme.Numerics(*setup.numerics)))
+        dt = np.asarray(scheme.zone_dt(np.diff(x), state.a, state.v, setup.numerics))
         zone = int(np.argmin(dt))
         return (f"zone {zone} at x = {0.5 * (x[zone] + x[zone + 1]):.6g} m (width {x[zone + 1] - x[zone]:.3g} m) "
                 f"limits the step to {dt[zone]:.3g} s")
@@ -95,24 +96,24 @@ class Lagrangian1D:
     def summary(self, sc: Scenario, setup, hist: dict, state: scheme.State) -> dict:
         if sc.charge is not None:
             return charge_summary(sc, setup, hist, state)
-        info = setup.info
+        theory = setup.theory
         fixed = sc.plate.fixed
         v_plate = 0.0 if fixed else float(state.v[-1])
-        impulse = float(state.face_impulse) if fixed else float(state.v[-1]) * info["plate_areal_mass"]
-        cr_theory = info.get("reflection_coefficient_theory")
-        incident_impulse = info.get("incident_impulse")
-        energy = float(scheme.total_energy(state, scheme.Boundaries(*setup.boundaries)))
+        impulse = float(state.face_impulse) if fixed else float(state.v[-1]) * theory.plate_areal_mass
+        cr_theory = theory.reflection_coefficient_theory
+        incident_impulse = theory.incident_impulse
+        energy = float(scheme.total_energy(state, setup.boundaries))
         out = {
             "plate_velocity": v_plate,
             "plate_displacement": float(state.x[-1] - setup.x[-1]),
             "plate_impulse": impulse,
             "plate_impulse_max": float(np.max(hist["plate_impulse"])),
             "peak_overpressure": _finite(state.peak_face_overpressure),
-            "beta_s": info.get("beta_s"),
+            "beta_s": theory.beta_s,
             "reflection_coefficient_theory": cr_theory,
-            "impulse_ratio_theory": info.get("impulse_ratio_theory"),
+            "impulse_ratio_theory": theory.impulse_ratio_theory,
             "impulse_ratio": impulse / (cr_theory * incident_impulse) if cr_theory and incident_impulse else None,
-            "plate_areal_mass": info["plate_areal_mass"],
+            "plate_areal_mass": theory.plate_areal_mass,
             "energy_error_relative": float(hist["energy_error"][-1]) / energy,
         }
         if sc.output.gauges:
@@ -120,15 +121,16 @@ class Lagrangian1D:
             out["gauge_peak_overpressure"] = [_finite(v) for v in state.gauge_peak]
             out["gauge_impulse"] = [_finite(v) for v in state.gauge_impulse]
         if sc.incident.profile == "uniform":
-            out["reflection_coefficient"] = _measured_reflection(hist, info)
-            for key in ("arrival_time", "duration", "clean_duration", "f_R", "f_R_eq30", "free_surface_velocity"):
-                out[key] = info.get(key)
-            if info["duration"] > info["clean_duration"]:
-                out["warning"] = (f"waves re-reflected by the piston reach the plate {info['clean_duration']:.4g} s "
-                                  f"after shock arrival, before the end of the run ({info['duration']:.4g} s after "
+            out["reflection_coefficient"] = _measured_reflection(hist, theory)
+            out.update(arrival_time=theory.arrival_time, duration=theory.duration,
+                       clean_duration=theory.clean_duration, f_R=theory.f_R, f_R_eq30=theory.f_R_eq30,
+                       free_surface_velocity=theory.free_surface_velocity)
+            if theory.duration > theory.clean_duration:
+                out["warning"] = (f"waves re-reflected by the piston reach the plate {theory.clean_duration:.4g} s "
+                                  f"after shock arrival, before the end of the run ({theory.duration:.4g} s after "
                                   "arrival); lengthen domain.length or shorten time.end")
         if sc.incident.profile == "sedov":
-            out["explosion_time"] = info["explosion_time"]
+            out["explosion_time"] = theory.explosion_time
         return out
 
     def plots(self, folder: Path, sc: Scenario, setups: list, histories: list[dict], members: list[dict],
@@ -154,7 +156,7 @@ def burn_front_pressure(setup, state: scheme.State) -> float:
     each zone has when its burn completes (F reaches 1): the end of the programmed burn's reaction
     zone, which a steady wave at D ~ D_CJ leaves at the CJ point."""
     x0 = setup.x
-    centre = 0.5 * (x0[1:] + x0[:-1])[: setup.explosive_zones] / setup.info["charge_radius"]
+    centre = 0.5 * (x0[1:] + x0[:-1])[: setup.explosive_zones] / setup.charge.charge_radius
     sel = (centre >= CJ_WINDOW[0]) & (centre <= CJ_WINDOW[1])
     return float(np.mean(np.asarray(state.zone_burnt)[: setup.explosive_zones][sel]))
 
@@ -163,22 +165,22 @@ def charge_summary(sc: Scenario, setup, hist: dict, state: scheme.State) -> dict
     """Charge, CJ check (burn front pressure vs the CJ pressure of the JWL set), energy budget and,
     per gauge, peak overpressure, positive impulse, arrival time (blast_maps definitions) beside
     the Kingery-Bulmash values for a spherical TNT charge."""
-    info = setup.info
+    charge = setup.charge
     hx = lookup(sc.charge.explosive)
     cj = chapman_jouguet(hx.eos_params(), hx.E0)
-    energy = float(scheme.total_energy(state, scheme.Boundaries(*setup.boundaries)))
-    front = burn_front_pressure(setup, state) if float(state.t) >= info["charge_radius"] / info[
-        "detonation_velocity"] else None
+    energy = float(scheme.total_energy(state, setup.boundaries))
+    burnt = float(state.t) >= charge.charge_radius / charge.detonation_velocity
+    front = burn_front_pressure(setup, state) if burnt else None
     out = {
-        "charge_mass": info["charge_mass"], "charge_radius": info["charge_radius"],
-        "charge_zone_width": info["charge_zone_width"], "geometry": info["geometry"],
-        "detonation_velocity": info["detonation_velocity"],
+        "charge_mass": charge.charge_mass, "charge_radius": charge.charge_radius,
+        "charge_zone_width": charge.charge_zone_width, "geometry": charge.geometry,
+        "detonation_velocity": charge.detonation_velocity,
         "cj_pressure": cj.pressure, "burn_front_pressure": front,
         "burn_front_pressure_ratio": None if front is None else front / cj.pressure,
         "energy_error_relative": float(hist["energy_error"][-1]) / energy,
         # afterburning energy released by the end of the run [J, J/m or J/m^2 like charge_mass]; 0 without
-        "afterburn_energy_released": info["measure"] * float(state.afterburn_released),
-        "afterburn_energy_total": info["afterburn_energy"],  # charge.afterburn_energy x charge volume
+        "afterburn_energy_released": charge.measure * float(state.afterburn_released),
+        "afterburn_energy_total": charge.afterburn_energy,  # charge.afterburn_energy x charge volume
     }
     t = float(state.t)
     gauges = []
@@ -191,7 +193,7 @@ def charge_summary(sc: Scenario, setup, hist: dict, state: scheme.State) -> dict
                        "arrival_time": arrival if seen else None,
                        "positive_phase_duration": (min(float(state.gauge_end[k]), t) - arrival) if seen else None})
     if gauges and sc.domain.geometry == "spherical" and sc.charge.explosive == "tnt":
-        gauges = compare(gauges, [g["position"] for g in gauges], info["charge_mass"], "free-air")
+        gauges = compare(gauges, [g["position"] for g in gauges], charge.charge_mass, "free-air")
     out["gauges"] = gauges
     return out
 
@@ -202,14 +204,14 @@ def _finite(value):
     return value if np.isfinite(value) else None
 
 
-def _measured_reflection(hist: dict, info: dict):
+def _measured_reflection(hist: dict, theory: plate1d.Theory):
     """Mean wall overpressure over the second half of the clean window, / p_s (002 Fig. 2)."""
-    window = min(info["duration"], info["clean_duration"])
-    t = hist["time"] - info["arrival_time"]
+    window = min(theory.duration, theory.clean_duration)
+    t = hist["time"] - theory.arrival_time
     sel = (t >= 0.5 * window) & (t <= window)
     if not np.any(sel):
         return None
-    return float(np.mean(hist["plate_overpressure"][sel]) / info["incident_overpressure"])
+    return float(np.mean(hist["plate_overpressure"][sel]) / theory.incident_overpressure)
 
 
 METHOD = register(Lagrangian1D())

@@ -14,7 +14,34 @@ from blastfsi.eos import ideal_gas
 from blastfsi.exact import shock
 from blastfsi.exact.sedov import PlanarSedov
 from blastfsi.lagrangian1d.scenario import Scenario
+from blastfsi.lagrangian1d.scheme import Boundaries, Numerics
 from blastfsi.scenario import ScenarioError
+
+
+@dataclass(frozen=True)
+class Theory:
+    """Theory values and metadata of a plate run; None where the problem has none
+    (the shock values for the Sedov blast, the Sedov values for the others)."""
+
+    plate_areal_mass: float  # [kg/m^2]; 0 for a rigid wall or a free end
+    incident_overpressure: float | None = None  # p_s [Pa]
+    shock_speed: float | None = None  # U_s [m/s]
+    shocked_density: float | None = None  # rho_s [kg/m^3]
+    particle_velocity: float | None = None  # u_s [m/s]
+    reflection_coefficient_theory: float | None = None  # C_R = p_r / p_s, 002 Eqs. (24)-(25) [-]
+    f_R: float | None = None  # light-plate compressibility factor from shock theory [-]
+    f_R_eq30: float | None = None  # f_R of 002 Eq. (30) as printed [-]; None unless gamma = 1.4
+    free_surface_velocity: float | None = None  # gas velocity after the shocked state expands to 0 [m/s]
+    duration: float | None = None  # t_i [s]
+    incident_impulse: float | None = None  # I_i = p_s t_i [Pa s]
+    beta_s: float | None = None  # 002 Eq. (28) [-]; 0 for a rigid wall, None for a free end
+    impulse_ratio_theory: float | None = None  # I_p / (C_R I_i), 002 Eq. (29) [-]
+    arrival_time: float | None = None  # time the incident shock reaches the plate [s]
+    clean_duration: float | None = None  # window after arrival free of waves re-reflected by the piston [s]
+    nominal: bool = False  # the shock values are those of the nominal p_s, t_i (the exponential blast)
+    explosion_time: float | None = None  # time from the explosion to simulated time 0 (Sedov) [s]
+    sedov_alpha: float | None = None  # alpha of the planar Sedov solution [-]
+    front_speed_initial: float | None = None  # Sedov front speed at simulated time 0 [m/s]
 
 
 @dataclass(frozen=True)
@@ -25,11 +52,11 @@ class Setup:
     v: np.ndarray  # node velocities (N+1,)
     e: np.ndarray  # zone specific internal energy (N,)
     zone_mass: np.ndarray  # (N,) kg/m^2
-    numerics: tuple  # (gamma, K1, K2, cfl)
-    boundaries: tuple  # (left_velocity, left_pressure, right_mass, right_pressure)
+    numerics: Numerics  # of Python floats
+    boundaries: Boundaries  # of Python floats
     left_velocity_set: bool
     right_fixed: bool
-    info: dict = field(default_factory=dict)  # theory values and problem metadata (JSON-able)
+    theory: Theory
     gauges: np.ndarray = field(default_factory=lambda: np.zeros(0))  # gauge positions [m]
     ambient_pressure: float = 0.0  # overpressure reference p0 of the gauges [Pa]
     arrival_fraction: float = 0.0  # output.arrival_fraction: a gauge's arrival overpressure, of p0 (set by build)
@@ -56,33 +83,34 @@ def _plate_mass(sc: Scenario, beta_mass=None) -> float:
     return beta_mass
 
 
-def _theory(sc: Scenario, ps: float, duration, plate_mass: float) -> dict:
-    """Eq. (25), (28)-(30) values for an incident overpressure ps lasting duration."""
+def _theory(sc: Scenario, ps: float, duration, plate_mass: float, **metadata) -> Theory:
+    """Eq. (25), (28)-(30) values for an incident overpressure ps lasting duration, with ``metadata``."""
     g = sc.gas
     s = shock.incident_shock(ps, g.pressure, g.density, g.gamma)
-    cr = float(shock.reflection_coefficient(ps, g.pressure, g.gamma))
-    info = {
-        "incident_overpressure": float(ps),
-        "shock_speed": float(s.shock_speed),
-        "shocked_density": float(s.density),
-        "particle_velocity": float(s.particle_velocity),
-        "reflection_coefficient_theory": cr,
-        "f_R": float(shock.f_R(ps, g.pressure, g.density, g.gamma)),
-        "free_surface_velocity": float(shock.free_surface_velocity(ps, g.pressure, g.density, g.gamma)),
-        "duration": duration,
-        "incident_impulse": None if duration is None else float(ps * duration),
-        "beta_s": None,
-        "impulse_ratio_theory": None,
-    }
-    if g.gamma == 1.4:
-        info["f_R_eq30"] = float(shock.f_R_eq30(ps, g.pressure))
+    f_r = float(shock.f_R(ps, g.pressure, g.density, g.gamma))
+    beta = ratio = None
     if duration is not None and (sc.plate.fixed or plate_mass > 0):  # a free end (mass 0) has no beta_s
         if sc.plate.fixed:
-            info["beta_s"] = 0.0
+            beta = 0.0
         else:
-            info["beta_s"] = float(shock.beta_s(ps, duration, plate_mass, g.pressure, g.density, g.gamma))
-        info["impulse_ratio_theory"] = float(shock.impulse_ratio_uniform(info["beta_s"], info["f_R"]))
-    return info
+            beta = float(shock.beta_s(ps, duration, plate_mass, g.pressure, g.density, g.gamma))
+        ratio = float(shock.impulse_ratio_uniform(beta, f_r))
+    return Theory(
+        plate_areal_mass=plate_mass,
+        incident_overpressure=float(ps),
+        shock_speed=float(s.shock_speed),
+        shocked_density=float(s.density),
+        particle_velocity=float(s.particle_velocity),
+        reflection_coefficient_theory=float(shock.reflection_coefficient(ps, g.pressure, g.gamma)),
+        f_R=f_r,
+        f_R_eq30=float(shock.f_R_eq30(ps, g.pressure)) if g.gamma == 1.4 else None,
+        free_surface_velocity=float(shock.free_surface_velocity(ps, g.pressure, g.density, g.gamma)),
+        duration=duration,
+        incident_impulse=None if duration is None else float(ps * duration),
+        beta_s=beta,
+        impulse_ratio_theory=ratio,
+        **metadata,
+    )
 
 
 def clean_window(sc: Scenario, ps: float) -> float:
@@ -124,12 +152,12 @@ def build_uniform(sc: Scenario) -> Setup:
     mass = _plate_mass(sc, beta_mass)
     v = np.zeros_like(x)
     v[0] = s.particle_velocity
-    info = _theory(sc, inc.overpressure, duration, mass)
-    info.update(arrival_time=arrival, clean_duration=clean_window(sc, inc.overpressure), plate_areal_mass=mass)
+    theory = _theory(sc, inc.overpressure, duration, mass, arrival_time=arrival,
+                     clean_duration=clean_window(sc, inc.overpressure))
     return Setup(
         x=x, v=v, e=np.full(dx.shape, ideal_gas.energy(g.density, g.pressure, g.gamma)), zone_mass=g.density * dx,
-        numerics=_numerics(sc), boundaries=(float(s.particle_velocity), g.pressure, mass, _back(sc)),
-        left_velocity_set=True, right_fixed=sc.plate.fixed, info=info,
+        numerics=_numerics(sc), boundaries=Boundaries(float(s.particle_velocity), g.pressure, mass, _back(sc)),
+        left_velocity_set=True, right_fixed=sc.plate.fixed, theory=theory,
     )
 
 
@@ -159,12 +187,12 @@ def build_exponential(sc: Scenario) -> Setup:
     nominal = shock.incident_shock(inc.overpressure, g.pressure, g.density, g.gamma)
     duration = inc.decay_length / float(nominal.shock_speed)
     mass = _plate_mass(sc)
-    info = _theory(sc, inc.overpressure, duration, mass)
-    info.update(arrival_time=inc.standoff / float(nominal.shock_speed), plate_areal_mass=mass, nominal=True)
+    theory = _theory(sc, inc.overpressure, duration, mass, arrival_time=inc.standoff / float(nominal.shock_speed),
+                     nominal=True)
     return Setup(
         x=x, v=np.asarray(v, float), e=ideal_gas.energy(zs.density, p_abs, g.gamma), zone_mass=zs.density * dx,
-        numerics=_numerics(sc), boundaries=(0.0, float(p_abs[0]), mass, _back(sc)),
-        left_velocity_set=False, right_fixed=sc.plate.fixed, info=info,
+        numerics=_numerics(sc), boundaries=Boundaries(0.0, float(p_abs[0]), mass, _back(sc)),
+        left_velocity_set=False, right_fixed=sc.plate.fixed, theory=theory,
     )
 
 
@@ -174,7 +202,7 @@ def build_sedov(sc: Scenario) -> Setup:
     ``incident.front_position``. Zone mass and total energy are the exact
     cell averages (8-point Gauss quadrature), so the integrable singularity at
     the centre (rho -> 0, e -> inf) is represented without loss of mass or energy.
-    Simulated time 0 is explosion time ``explosion_time`` (in ``info``).
+    Simulated time 0 is explosion time ``explosion_time`` (in ``theory``).
 
     Near the centre rho ~ x^2.5 and e ~ x^-2.5, so the first zone's sound speed
     grows without bound under refinement (dt ~ dx^2.25). The "finite radius of
@@ -209,18 +237,17 @@ def build_sedov(sc: Scenario) -> Setup:
     v = fields(x)[1]
     v[0] = 0.0
     mass = _plate_mass(sc)
-    info = {"explosion_time": t0, "plate_areal_mass": mass, "beta_s": None, "reflection_coefficient_theory": None,
-            "impulse_ratio_theory": None, "incident_impulse": None, "sedov_alpha": blast.alpha,
-            "front_speed_initial": 2.0 / 3.0 * inc.front_position / t0}
+    theory = Theory(plate_areal_mass=mass, explosion_time=t0, sedov_alpha=blast.alpha,
+                    front_speed_initial=2.0 / 3.0 * inc.front_position / t0)
     return Setup(
         x=x, v=v, e=e, zone_mass=mass_avg * dx, numerics=_numerics(sc),
-        boundaries=(0.0, g.pressure, mass, _back(sc)), left_velocity_set=True, right_fixed=sc.plate.fixed,
-        info=info,
+        boundaries=Boundaries(0.0, g.pressure, mass, _back(sc)), left_velocity_set=True, right_fixed=sc.plate.fixed,
+        theory=theory,
     )
 
 
-def _numerics(sc: Scenario) -> tuple:
-    return (sc.gas.gamma, sc.numerics.K1, sc.numerics.K2, sc.numerics.cfl)
+def _numerics(sc: Scenario) -> Numerics:
+    return Numerics(sc.gas.gamma, sc.numerics.K1, sc.numerics.K2, sc.numerics.cfl)
 
 
 def _back(sc: Scenario) -> float:

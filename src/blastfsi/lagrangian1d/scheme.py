@@ -68,7 +68,7 @@ from blastfsi.eos.jwl import JWLParams
 
 
 class Numerics(NamedTuple):
-    """Scheme parameters (traced, so an ensemble may vary them)."""
+    """Scheme parameters (traced, so an ensemble may vary them; Python floats in a set-up)."""
 
     gamma: jnp.ndarray  # ratio of specific heats
     K1: jnp.ndarray  # quadratic viscosity coefficient, Eq. (5)
@@ -77,7 +77,7 @@ class Numerics(NamedTuple):
 
 
 class Boundaries(NamedTuple):
-    """Boundary data. Static flags choose the kind; arrays carry the values.
+    """Boundary data. Static flags choose the kind; arrays carry the values (Python floats in a set-up).
 
     Left end: prescribed velocity (piston; 0 = fixed wall / symmetry plane) when
     ``left_velocity_set`` else a prescribed pressure (free end).

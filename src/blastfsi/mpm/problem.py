@@ -17,10 +17,8 @@ from blastfsi import mpm
 from blastfsi.constitutive import get as get_model
 from blastfsi.constitutive import models as _models  # noqa: F401  (registers the constitutive models)
 from blastfsi.eos import jwl
-from blastfsi.materials import MaterialError, lookup
 from blastfsi.mpm.scenario import MPMScenario
-from blastfsi.scenario import AXES
-from blastfsi.scenario import ScenarioError, cells_along
+from blastfsi.scenario import AXES, ScenarioError, cells_along, material
 
 FLUID = "fluid"
 
@@ -177,10 +175,7 @@ def place(bodies, grid: mpm.Grid, overrides: dict, *, tracers=(), impactor=None,
 
     def index(name: str, field: str) -> int:
         if name not in library:
-            try:
-                library[name] = lookup(name, overrides.get(name), field=field)
-            except MaterialError as err:
-                raise ScenarioError(str(err)) from None
+            library[name] = material(overrides, name, field)
             names.append(name)
         return names.index(name)
 
