@@ -54,7 +54,7 @@ import numpy as np
 from blastfsi import method as methods
 from blastfsi import runtime
 from blastfsi.detonation import remap as rm
-from blastfsi.euler.config import MIN_CELLS
+from blastfsi.euler.config import MIN_CELLS, BlastTable
 from blastfsi.euler.scenario import faces_toward
 from blastfsi.exact import kingery_bulmash as kb
 from blastfsi.materials.gases import GASES, JWLExplosive
@@ -103,8 +103,8 @@ class ChargeFields(NamedTuple):
     velocity: np.ndarray
     pressure: np.ndarray
     reference_pressure: float
-    info: ChargeRemap
-    blast: dict | None = None  # the blast table (fields of blastfsi.euler.config.BlastTable, NumPy) or None
+    remap: ChargeRemap
+    blast: BlastTable | None = None  # a stand-off charge's blast table (host arrays), None without blast faces
 
 
 def _explosive(sc) -> JWLExplosive:
@@ -295,13 +295,13 @@ def table_plan(sc, g, centre, mask, t_remap: float, speed: float) -> dict:
             "radii": r0 + dr * np.arange(n_r), "times": t_remap + dt * np.arange(n_t), "mb": mb}
 
 
-def blast_table(one_d: Detonation1D, plan: dict) -> dict:
+def blast_table(one_d: Detonation1D, plan: dict) -> BlastTable:
     """The table of ``plan``: the 1D run ``one_d`` (at the remap time) advanced to each of its times."""
     rows = np.empty((plan["times"].size, plan["radii"].size, TABLE_ROWS))
     for k, t in enumerate(plan["times"]):
         one_d.advance_to(float(t))
         rows[k] = table_rows(one_d.profile(), plan["radii"])
-    return {key: plan[key] for key in ("cells", "radius", "unit", "t0", "dt")} | {"rows": rows}
+    return BlastTable(plan["cells"], plan["radius"], plan["unit"], plan["t0"], plan["dt"], rows)
 
 
 def probe_times(explosive: str, mass: float, r_lim: float, c0: float, burn: float, j: int) -> list[float]:
@@ -392,7 +392,7 @@ def charge_initial(sc, g) -> ChargeFields:
         speed = shock_speed(one_d.arrays(), setup.explosive_zones, j, air.gamma, p_a, rho_a)
         plan = table_plan(sc, g, centre, mask, float(t_remap), speed)
         table = blast_table(one_d, plan)
-        layer = {"blast_table_mb": plan["mb"], "blast_table_shape": table["rows"].shape,
+        layer = {"blast_table_mb": plan["mb"], "blast_table_shape": table.rows.shape,
                  "blast_layer_cells": int(mask.sum()), "one_d_length": float(length)}
     info = ChargeRemap(remap_time=float(t_remap), remap_radius=float(r_dist), limit_radius=float(r_lim),
                       charge_radius=float(radius), charge_mass=float(mass), charge_center=tuple(centre.tolist()),

@@ -161,8 +161,8 @@ def build_gas(sc: GasPart) -> Setup:
         return Setup(grid=g, materials=c.materials, gases=c.gases, eos=c.eos, bc=bc, rho_k=c.rho_k, alpha=c.alpha,
                      velocity=c.velocity, pressure=c.pressure, reference_pressure=c.reference_pressure,
                      gauges=gauges, gauge_cells=gauge_cells, cfl=sc.cfl,
-                     arrival_fraction=sc.output.arrival_fraction, start_time=c.info.remap_time,
-                     charge=c.info, blast=None if c.blast is None else BlastTable(**c.blast))
+                     arrival_fraction=sc.output.arrival_fraction, start_time=c.remap.remap_time,
+                     charge=c.remap, blast=c.blast)
     ndim = g.ndim
     mesh = g.mesh()
     if init.kind == "riemann":
