@@ -28,7 +28,7 @@ SCRIPT = textwrap.dedent('''
     from importlib.resources import files
     import jax
     import numpy as np
-    from blastfsi import simulation
+    from blastfsi import method as methods, simulation
     from blastfsi.scenario import ScenarioError
 
     def example(name, **over):
@@ -104,7 +104,7 @@ SCRIPT = textwrap.dedent('''
                 entry.update(fields=worst(ref[0], f), gauges=gauge_diff(ref[1], s, ref[0], data["time"]["end"]),
                              steps_ref=ref[1]["steps"], gauge_values=[ref[1]["gauges"], s["gauges"]])
             if n == counts[1]:
-                exe = list(simulation._EXECUTABLES.values())[-1]  # (compiled by this run: its shapes are new)
+                exe = list(methods._EXECUTABLES.values())[-1]  # (compiled by this run: its shapes are new)
                 entry["hlo"] = hlo_facts(exe, cells, plane)
             report[f"{name}/{n}"] = entry
 
