@@ -58,7 +58,7 @@ from blastfsi.euler.config import MIN_CELLS, BlastTable
 from blastfsi.euler.scenario import faces_toward
 from blastfsi.exact import kingery_bulmash as kb
 from blastfsi.materials.gases import GASES, JWLExplosive
-from blastfsi.lagrangian1d.charge_problem import EXPLOSIVES, charge_mass, charge_radius
+from blastfsi.lagrangian1d.charge_problem import charge_mass, charge_radius, explosive
 from blastfsi.lagrangian1d.method import METHOD as LAGRANGIAN1D
 from blastfsi.scenario import AXES, ScenarioError, material, parse
 from blastfsi.timeloop import FAULT_MESSAGES
@@ -108,10 +108,8 @@ class ChargeFields(NamedTuple):
 
 
 def _explosive(sc) -> JWLExplosive:
-    name = sc.initial.explosive
-    if name not in GASES or not isinstance(GASES[name], JWLExplosive):
-        raise ScenarioError(f"initial.explosive: unknown explosive {name!r}; available: {', '.join(EXPLOSIVES)}")
-    return material(sc.materials, name, "initial.explosive")
+    explosive(sc.initial.explosive, "initial.explosive")  # a JWL explosive of the library (else ScenarioError)
+    return material(sc.materials, sc.initial.explosive, "initial.explosive")
 
 
 def _ambient(sc):
@@ -194,6 +192,10 @@ class Detonation1D:
                                            jnp.float64))
             self.params = jax.tree_util.tree_map(lambda a: jnp.asarray(a)[None],
                                                  LAGRANGIAN1D.params(self.setup, jnp.float64))
+        time = self.scenario.time
+        self._scalars = (STEPS_PER_CALL, time.end / (self.scenario.output.history_samples - 1),
+                         time.dt_min_fraction)  # (as the driver's: history samples from 0 to time.end)
+        self._advance = None  # the compiled time loop, at the first advance_to
 
     @property
     def t(self) -> float:
@@ -201,25 +203,23 @@ class Detonation1D:
 
     def advance_to(self, t_end: float) -> None:
         """Advance to ``t_end`` (ScenarioError on a fault or an exhausted step budget)."""
-        if self.t == 0.0:
-            ch = self.scenario.charge
-            mass = charge_mass(ch.radius, GASES[ch.explosive].density, self.setup.geometry)
-            log.info(f"1D detonation of {mass:.4g} {'kg/m' if self.setup.geometry == 1 else 'kg'} "
-                     f"{ch.explosive.upper()} to t = "
-                     f"{t_end * 1e3:.4g} ms ({self.setup.explosive_zones} zones across the charge radius)")
-        time = self.scenario.time
-        scalars = (STEPS_PER_CALL, time.end / (self.scenario.output.history_samples - 1),
-                   time.dt_min_fraction)  # (as the driver's: history samples from 0 to time.end)
+        time, scalars = self.scenario.time, self._scalars
         with runtime.precision("float64"):
-            advance, _ = methods.compiled_advance(LAGRANGIAN1D, self.static, self.state, self.params, t_end,
-                                                  *scalars)
+            if self._advance is None:
+                ch = self.scenario.charge
+                mass = charge_mass(ch.radius, GASES[ch.explosive].density, self.setup.geometry)
+                log.info(f"1D detonation of {mass:.4g} {'kg/m' if self.setup.geometry == 1 else 'kg'} "
+                         f"{ch.explosive.upper()} to t = {t_end * 1e3:.4g} ms ({self.setup.explosive_zones} zones "
+                         "across the charge radius)")
+                self._advance, _ = methods.compiled_advance(LAGRANGIAN1D, self.static, self.state, self.params,
+                                                            t_end, *scalars)
             while self.t < t_end:
                 steps = int(np.asarray(self.state.step)[0])
                 if steps >= time.max_steps:
                     raise ScenarioError(f"the 1D detonation of the charge took time.max_steps = {time.max_steps} "
                                         f"steps before t = {t_end:.4g} s")
-                self.state = advance(self.state, self.params, t_end, min(STEPS_PER_CALL, time.max_steps - steps),
-                                     *scalars[1:])
+                self.state = self._advance(self.state, self.params, t_end,
+                                           min(STEPS_PER_CALL, time.max_steps - steps), *scalars[1:])
                 fault = int(np.asarray(self.state.fault)[0])
                 if fault != 0:
                     raise ScenarioError(f"the 1D detonation of the charge failed at t = {self.t:.4g} s: "
