@@ -149,14 +149,16 @@ class Cfdmp:
         return problem.build(sc)
 
     def static(self, setup: problem.Setup, sc: CfdmpScenario) -> Static:
-        return self._static(setup, SCHEME_CODE[sc.numerics.scheme], LIMITER_CODE[sc.numerics.limiter])
+        return self._static(setup, SCHEME_CODE[sc.numerics.scheme], LIMITER_CODE[sc.numerics.limiter],
+                            sc.numerics.limiting == "characteristic")
 
     @staticmethod
-    def _static(setup: problem.Setup, scheme: int, limiter: int = ek.VAN_LEER) -> Static:
+    def _static(setup: problem.Setup, scheme: int, limiter: int = ek.VAN_LEER, characteristic: bool = True) -> Static:
         e = setup.euler
         cfg = ek.Config(shape=e.grid.shape, dx=float(e.grid.dx), geometry=GEOMETRY_CODE[e.grid.geometry], bc=e.bc,
                         scheme=scheme, n_materials=len(e.materials),
-                        origin=tuple(float(v) for v in e.grid.lower), limiter=limiter)
+                        origin=tuple(float(v) for v in e.grid.lower), limiter=limiter,
+                        characteristic=characteristic)
         c = setup.coupling
         n_struct = c.structure_particles
         # the structures fill the first slots of the pool and are never deleted; the gas lives after them

@@ -14,7 +14,7 @@ from typing import Literal, Optional
 
 from pydantic import Field, model_validator
 
-from blastfsi.euler.scenario import (Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, check_gas_part,
+from blastfsi.euler.scenario import (Boundaries, Domain, EulerOutput, Grid, Initial, Limiter, Limiting, check_gas_part,
                                      gas_materials, grid_demand)
 from blastfsi.mpm.scenario import (Body, MPMNumerics, Tracers, body_materials, body_particles, check_bodies,
                                    lattice_count, particle_demand)
@@ -58,6 +58,8 @@ class CfdmpNumerics(MPMNumerics):
         "Eulerian scheme (see the euler method's numerics.scheme)"))
     limiter: Limiter = Field("van-leer", description=(
         "slope limiter of the Eulerian hllc-muscl and hllc-hancock schemes (see the euler method's numerics.limiter)"))
+    limiting: Limiting = Field("characteristic", description=(
+        "what the Eulerian schemes' limiter acts on (see the euler method's numerics.limiting)"))
     cfl: float = Field(0.4, gt=0.0, le=1.0, description=(
         "Courant number of the MPM step, and of the Eulerian one unless euler_cfl is set (one common step: the "
         "smaller of the two)"))

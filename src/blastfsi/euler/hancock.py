@@ -82,7 +82,7 @@ def hancock_flux(z, nw, lam, geo, eos_r, cfg: Config, lay, axis):
     0..n-1 (None with one material)) of one axis; z: rows [primitive rows (nw), rho e, c^2] with NG
     ghost cells on that axis."""
     n = z[0].shape[axis] - 2 * NG
-    slopes = hllc.cell_slopes(z, nw, cfg, axis)  # cells -1..n
+    slopes = hllc.cell_slopes(z, nw, cfg, lay, axis)  # cells -1..n
     cells = tuple(shift(x, axis, 1, n + 2) for x in z)
     delta = predictor(cells[:nw], slopes, cells[nw + 1], lam, geo, lay, axis)
     w_left = [shift(x + 0.5 * s + d, axis, 0, n + 1) for x, s, d in zip(cells, slopes, delta)]  # w^R of cell f-1

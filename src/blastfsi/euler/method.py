@@ -106,7 +106,8 @@ class Euler:
                               geometry=GEOMETRY_CODE[setup.grid.geometry], bc=setup.bc,
                               scheme=SCHEME_CODE[sc.numerics.scheme], n_materials=len(setup.materials),
                               origin=tuple(float(v) for v in setup.grid.lower),
-                              limiter=LIMITER_CODE[sc.numerics.limiter], devices=setup.devices)
+                              limiter=LIMITER_CODE[sc.numerics.limiter], devices=setup.devices,
+                              characteristic=sc.numerics.limiting == "characteristic")
 
     def static(self, setup: problem.Setup, sc: EulerScenario) -> Static:
         flat = tuple(int(np.ravel_multi_index(c, setup.grid.shape)) for c in setup.gauge_cells)
@@ -197,8 +198,9 @@ class Euler:
         t = float(state.t)
         out = {"scheme": sc.numerics.scheme, "geometry": setup.grid.geometry, "materials": list(setup.materials),
                "dx": setup.grid.dx}
-        if sc.numerics.scheme != "lax-wendroff":  # the HLLC schemes' limiter
+        if sc.numerics.scheme != "lax-wendroff":  # the HLLC schemes' limiter and what it acts on
             out["limiter"] = sc.numerics.limiter
+            out["limiting"] = sc.numerics.limiting
         for q in ("mass", "energy"):
             first, last = hist[q][0], hist[q][-1]
             out[f"{q}_change_relative"] = float((last - first) / abs(first)) if first != 0 else None
