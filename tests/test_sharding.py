@@ -1,5 +1,6 @@
-"""The Eulerian grid split across devices (``numerics.devices``): results equal the one-device run's to
-round-off, the compiled loop exchanges halos (not whole arrays), bad counts are refused.
+"""The Eulerian grid and the MPM particle pool split across devices (``numerics.devices``): results equal the
+one-device run's to round-off, the compiled loop exchanges halos or nodal sums (not whole arrays), bad counts
+are refused.
 
 JAX fixes its device count at start-up, so the split runs go in one subprocess with 8 virtual CPU devices
 (``XLA_FLAGS=--xla_force_host_platform_device_count=8``), which prints its measurements as JSON.
@@ -22,6 +23,12 @@ from blastfsi.scenario import ScenarioError, expand
 # these runs' 10-20 steps: measured 2e-15 of each field's largest value. 1e-13 (~450 ulps) is that
 # with room, and a wrong halo (a stale or missing ghost cell) is an O(1) relative error.
 RELATIVE = 1e-13
+# MPM: the nodal sums of a split pool are partial sums per device added across devices, so every nodal mass,
+# momentum and force of every step is summed in another order (a few ulps each, ~1e-15 relative), and the
+# particles carry that over the steps (taylor-bar, 114 steps: 1.8e-14 in velocity, 1.0e-13 in stress, where
+# the plastic return and the stiff elastic update amplify velocity-gradient differences). 1e-12 is ten times
+# that; a particle lost or counted twice by the split is an O(1/particles per node) ~ 10 % error.
+RELATIVE_MPM = 1e-12
 
 SCRIPT = textwrap.dedent('''
     import copy, json, pathlib, re, sys, tomllib
@@ -71,18 +78,18 @@ SCRIPT = textwrap.dedent('''
                     worst_rel = max(worst_rel, abs(a - b) / float(scale[key]))
         return worst_rel
 
+    def op_sizes(exe, op):  # per collective ``op`` of the compiled loop: the element count of its largest array
+        found = []
+        for line in exe.as_text().splitlines():
+            m = re.search(r"= (\\S+) " + op + r"(-start)?\\(", line)
+            if m:
+                found.append(max([int(np.prod([int(d) for d in dims.split(",") if d] or [1]))
+                                  for dims in re.findall(r"\\[([0-9,]*)\\]", m.group(1))] or [0]))
+        return found
+
     def hlo_facts(exe, cells, planes):
-        text = exe.as_text()
-        def sizes(op):
-            found = []
-            for line in text.splitlines():
-                m = re.search(r"= (\\S+) " + op + r"(-start)?\\(", line)
-                if m:
-                    found.append(max([int(np.prod([int(d) for d in dims.split(",") if d] or [1]))
-                                      for dims in re.findall(r"\\[([0-9,]*)\\]", m.group(1))] or [0]))
-            return found
-        return {"permutes": sizes("collective-permute"), "gathers": sizes("all-gather"),
-                "all_to_all": len(sizes("all-to-all")), "cells": cells, "plane": planes}
+        return {"permutes": op_sizes(exe, "collective-permute"), "gathers": op_sizes(exe, "all-gather"),
+                "all_to_all": len(op_sizes(exe, "all-to-all")), "cells": cells, "plane": planes}
 
     report = {"visible": len(jax.devices())}
     cases = {
@@ -108,6 +115,28 @@ SCRIPT = textwrap.dedent('''
                 entry["hlo"] = hlo_facts(exe, cells, plane)
             report[f"{name}/{n}"] = entry
 
+    # MPM: the particle pool split over 2 and 8 devices (8: a pool of 6001 slots rounded up to 6008)
+    bar = example("taylor-bar", **{"time.end": 4e-6, "output.fields": 0, "output.plots": False})
+    ref = None
+    for n, capacity in ((1, None), (2, None), (8, 6001)):
+        data = with_devices(bar, n)
+        if capacity:
+            data["numerics"]["capacity"] = capacity
+        res = simulation.run(data)
+        P = res.state.mpm.particles
+        on = np.asarray(P.active)
+        state = {"x": np.asarray(P.x)[on], "v": np.asarray(P.v)[on], "stress": np.asarray(P.point.stress)[on],
+                 "plastic_strain": np.asarray(P.point.plastic_strain)[on]}
+        entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"], "pool": int(on.size)}
+        if ref is None:
+            ref = (state, res.summary["steps"])
+        else:
+            entry.update(fields=worst(ref[0], state), steps_ref=ref[1])
+        if n == 2:
+            exe = list(methods._EXECUTABLES.values())[-1]
+            entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
+        report[f"mpm/{n}"] = entry
+
     # a checkpoint written on 2 devices, continued on 4 and on 1 (host arrays: the layout is the run's)
     out = pathlib.Path(sys.argv[1]) / "a"
     data = copy.deepcopy(cases["sedov-2d"][0])
@@ -117,6 +146,16 @@ SCRIPT = textwrap.dedent('''
         again = simulation.run(with_devices(data, n), out=out, restart=True)
         report[f"restart/{n}"] = {"fields": worst(fields_of(whole), fields_of(again)),
                                   "steps": [whole.summary["steps"], again.summary["steps"]]}
+
+    # an MPM checkpoint written on 2 devices, continued on 1 (the pool, 6000 slots, divides into both)
+    out = pathlib.Path(sys.argv[1]) / "bar"
+    data = copy.deepcopy(bar)
+    data["output"]["checkpoint_interval"] = 2e-6
+    whole = simulation.run(with_devices(data, 2), out=out)
+    again = simulation.run(with_devices(data, 1), out=out, restart=True)
+    report["mpm_restart"] = {"fields": worst({"x": np.asarray(whole.state.mpm.particles.x)},
+                                             {"x": np.asarray(again.state.mpm.particles.x)}),
+                             "steps": [whole.summary["steps"], again.summary["steps"]]}
 
     for label, n, cells in (("too_many", 16, 32), ("all_indivisible", "all", 36)):
         bad = with_devices(cases["sedov-2d"][0], n)
@@ -156,6 +195,10 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
       up here as an all-gather of the grid's cell count (as it did for a concatenated zero ghost cell on a
       1D grid before boundaries.extend_coefficient selected it instead);
     * a checkpoint written on 2 devices continues on 4 and on 1 with the uninterrupted run's steps and fields;
+    * MPM (taylor-bar, 4 us): the particle pool split over 2 and 8 devices gives the one-device run's particles
+      and steps to round-off; a pool of 6001 slots is rounded up to 6008 on 8; the compiled loop adds the nodal
+      sums across devices (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
+      a checkpoint written on 2 devices continues on 1;
     * more devices than visible, and "all" not dividing the cells, are refused naming the key."""
     measured = _split_runs(tmp_path)
     assert measured["visible"] == 8
@@ -177,6 +220,17 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
         entry = measured[f"restart/{n}"]
         assert entry["steps"][0] == entry["steps"][1], n
         assert max(entry["fields"].values()) <= RELATIVE, (n, entry["fields"])
+    for n in (2, 8):  # MPM: the pool split over the devices
+        entry = measured[f"mpm/{n}"]
+        assert entry["devices_used"] == n and entry["steps"] == entry["steps_ref"], (n, entry)
+        assert max(entry["fields"].values()) <= RELATIVE_MPM, (n, entry["fields"])
+    assert measured["mpm/8"]["pool"] == 6008  # numerics.capacity 6001 rounded up to equal parts
+    hlo = measured["mpm/2"]["hlo"]
+    pool = measured["mpm/2"]["pool"]
+    assert hlo["all-reduce"] and max(hlo["all-reduce"]) < pool, hlo  # the nodal sums, added across devices
+    assert all(size < pool for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo  # particles stay put
+    entry = measured["mpm_restart"]
+    assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
     message = measured["too_many"]
     assert message is not None and "numerics.devices = 16" in message and "only 8 device(s) visible" in message
     message = measured["all_indivisible"]

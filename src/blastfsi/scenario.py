@@ -35,6 +35,7 @@ from typing import Annotated, Any, ClassVar, Literal, NamedTuple, Optional, Unio
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from blastfsi import method as methods
+from blastfsi import xla
 from blastfsi.materials import MaterialError, lookup
 
 DEFAULT_METHOD = "lagrangian1d"
@@ -99,6 +100,10 @@ class Output(Strict):
 
 def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+MAX_DEVICES = 4096  # numerics.devices
+Devices = Union[Annotated[int, Field(ge=1, le=MAX_DEVICES)], Literal["all"]]  # numerics.devices of a method
 
 
 class Numerics(Strict):
@@ -208,6 +213,15 @@ def cells_along(lower, upper, cells_x: int, key: str) -> tuple[float, tuple[int,
 
 
 AXES = ("x", "y", "z")
+
+
+def device_count(requested) -> int:
+    """numerics.devices (an int >= 1 or "all") as a number of devices; ScenarioError naming the key where
+    JAX sees fewer (:func:`blastfsi.xla.device_count`)."""
+    try:
+        return xla.device_count(requested)
+    except ValueError as err:
+        raise ScenarioError(str(err)) from None
 
 
 def check_box(lower, upper, key: str) -> None:

@@ -18,7 +18,7 @@ from blastfsi.detonation import kb_compare
 from blastfsi.detonation.kb_compare import scenario_references
 from blastfsi.diagnostics import blast_maps
 from blastfsi.euler.scenario import EulerScenario
-from blastfsi.scenario import AXES, ScenarioError
+from blastfsi.scenario import AXES, ScenarioError, device_count
 from blastfsi.method import Grid, register
 from blastfsi.euler import problem
 
@@ -69,10 +69,7 @@ def _pressure(U, params: Params, cfg):
 def devices(sc: EulerScenario) -> int:
     """numerics.devices as a number of devices; ScenarioError naming the key where JAX sees fewer, or
     ("all") where grid.cells is not divisible by them."""
-    try:
-        n = xla.device_count(sc.numerics.devices)
-    except ValueError as err:
-        raise ScenarioError(str(err)) from None
+    n = device_count(sc.numerics.devices)
     if sc.numerics.devices == "all" and sc.grid.cells % n:
         raise ScenarioError(f"numerics.devices = \"all\" is {n} devices here, and grid.cells = {sc.grid.cells} is not "
                             f"divisible by {n} (the grid is split along x in equal slabs); give grid.cells a multiple "

@@ -20,7 +20,7 @@ from pydantic import Field, model_validator
 
 from blastfsi.materials import check_overrides, lookup
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import (AXES, Coordinate, Demand, Output, ScenarioBase, Strict, Sweep, check_box,
+from blastfsi.scenario import (AXES, Coordinate, Demand, Devices, Output, ScenarioBase, Strict, Sweep, check_box,
                                gauge_points)
 
 Vector = Union[float, list[float]]
@@ -158,7 +158,6 @@ class Grid(Strict):
 # summed signal speeds; the split schemes' operators run at cfl / 2, linear limit 2, measured stable on Sod and 2D
 # blasts of pressure ratio 1e5 up to 1.5 (lax-wendroff) and 2.2 (hllc-hancock): 1.5 keeps both inside.
 UNSPLIT_CFL_MAX, SPLIT_CFL_MAX = 1.0, 1.5
-MAX_DEVICES = 4096  # numerics.devices
 
 
 class Numerics(SharedNumerics):
@@ -180,7 +179,7 @@ class Numerics(SharedNumerics):
         "each on its own; primitive: every primitive row on its own (a shock reflecting off a wall then "
         "overshoots the normal reflection in the wall cell, by ~19 % at 9.6 bar overpressure; kept to reproduce "
         "earlier results); ignored by lax-wendroff"))
-    devices: Union[Annotated[int, Field(ge=1, le=MAX_DEVICES)], Literal["all"]] = Field(1, description=(
+    devices: Devices = Field(1, description=(
         "devices (GPUs of this machine; an integer >= 1) the grid is split across, along x in equal slabs "
         "(grid.cells divisible by it), stepped together as one program that exchanges the slabs' boundary "
         "cells; 'all': every device JAX sees. Results agree with one device's to round-off"))

@@ -36,11 +36,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from blastfsi import mpm, timeloop
+from blastfsi import mpm, timeloop, xla
 from blastfsi.method import Particles, register
 from blastfsi.mpm import relaxation
 from blastfsi.mpm.scenario import MPMScenario
-from blastfsi.scenario import AXES
+from blastfsi.scenario import AXES, device_count
 from blastfsi.mpm import problem
 
 # blastfsi.plotting (matplotlib) is imported inside the plotting functions only: it loads when plots are drawn.
@@ -69,6 +69,20 @@ class Static(NamedTuple):
     config: mpm.Config
     tracers: tuple  # particle index of each tracer
     n_gauges: int  # output.gauges
+    devices: int = 1  # numerics.devices: the pool is split over them (:func:`placed`)
+
+
+def placed(s: State, devices: int) -> State:
+    """``s`` with its particle arrays constrained to the split of the pool over ``devices`` devices in equal
+    parts (:func:`blastfsi.xla.grid_sharding` along the pool's axis); unchanged on one device. Inside the
+    compiled loop every particle computation runs where its particle lies; the particle-to-grid sums are
+    partial sums per device that the compiler adds across devices (an all-reduce of the nodal arrays), the
+    grid update runs on every device, and the grid-to-particle step reads the (replicated) nodes locally."""
+    if devices <= 1:
+        return s
+    P = jax.tree_util.tree_map(lambda a: jax.lax.with_sharding_constraint(a, xla.grid_sharding(devices, a.ndim)),
+                               s.mpm.particles)
+    return s._replace(mpm=s.mpm._replace(particles=P))
 
 
 def _cast(tree, dtype):
@@ -115,12 +129,13 @@ class MPM:
     scenario_model = MPMScenario
 
     def build(self, sc: MPMScenario) -> problem.Setup:
-        return problem.build(sc)
+        return problem.build(sc, device_count(sc.numerics.devices))
 
     def static(self, setup: problem.Setup, sc: MPMScenario) -> Static:
         relax = relaxation.gas_materials(setup.models, sc.numerics.pressure_relaxation)
         return Static(mpm.make_config(setup.grid, setup.models, shape=sc.numerics.shape,
-                                      prescribed=setup.prescribed, relax=relax), setup.tracers, len(setup.gauges))
+                                      prescribed=setup.prescribed, relax=relax), setup.tracers, len(setup.gauges),
+                      setup.devices)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         prm = mpm.make_params(setup.model_params, cfl=setup.cfl, q_quadratic=setup.q_quadratic,
@@ -142,12 +157,12 @@ class MPM:
             return mpm.stable_dt(s.mpm, params.mpm, cfg)
 
         def step(s, dt):
-            return s._replace(mpm=mpm.step(s.mpm, dt, params.mpm, cfg))
+            return placed(s._replace(mpm=mpm.step(s.mpm, dt, params.mpm, cfg)), static.devices)
 
         def history_row(s):
             return history(static, s, params).values(s.hist.dtype)
 
-        return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
+        return timeloop.run_until(placed(state, static.devices), t_stop, max_steps, sample_interval, dt_floor_fraction,
                                   stable_dt=stable_dt, step=step, history_row=history_row)
 
     def history_columns(self, setup: problem.Setup, sc: MPMScenario) -> tuple:

@@ -43,6 +43,7 @@ class Setup:
     driven: bool  # some body moves with a prescribed velocity (its work is not booked: no energy balance)
     bodies: tuple  # per body (the impactor last): material, particles, mass, wave speed (JSON, for the summary)
     period_theory: float | None = None  # first-mode period of a fixed-free bar with a sine velocity profile [s]
+    devices: int = 1  # numerics.devices: the pool is split over them in equal parts
 
     @property
     def cells(self) -> int:
@@ -278,7 +279,9 @@ def place(bodies, grid: mpm.Grid, overrides: dict, *, tracers=(), impactor=None,
                      np.concatenate(body_ids), np.concatenate(spacings), tuple(extents), tuple(found))
 
 
-def build(sc: MPMScenario) -> Setup:
+def build(sc: MPMScenario, devices: int = 1) -> Setup:
+    """The set-up of ``sc``; ``devices``: the pool is split over that many devices in equal parts, so its
+    capacity is rounded up to a multiple of it."""
     grid = grid_of(sc)
     d = grid.dim
     imp = sc.impactor
@@ -288,7 +291,7 @@ def build(sc: MPMScenario) -> Setup:
     if capacity < n:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the bodies hold {n} particles; "
                             f"set numerics.capacity >= {n}")
-    pool = mpm.make_pool(pl.particles, capacity)
+    pool = mpm.make_pool(pl.particles, -(-capacity // devices) * devices)
     gauges = np.asarray(sc.output.gauges, float).reshape(-1, d)
     body = pl.body
     mass = np.asarray(pool.mass)[:n]
@@ -307,4 +310,4 @@ def build(sc: MPMScenario) -> Setup:
                  prescribed=any(b.prescribed or b.supports for b in sc.bodies), cfl=num.cfl,
                  q_quadratic=num.q_quadratic, q_linear=num.q_linear, reference_pressure=num.reference_pressure,
                  gravity=tuple(sc.gravity) or (0.0,) * d, driven=any(b.prescribed for b in sc.bodies),
-                 bodies=bodies, period_theory=period)
+                 bodies=bodies, period_theory=period, devices=devices)

@@ -32,7 +32,8 @@ from pydantic import Field, field_validator, model_validator
 from blastfsi.materials import check_overrides
 from blastfsi.mpm.viscosity import DEFAULT_LINEAR, DEFAULT_QUADRATIC
 from blastfsi.scenario import Numerics as SharedNumerics
-from blastfsi.scenario import AXES, Coordinate, Demand, Output, ScenarioBase, Strict, Sweep, check_box, gauge_points
+from blastfsi.scenario import (AXES, Coordinate, Demand, Devices, Output, ScenarioBase, Strict, Sweep, check_box,
+                               gauge_points)
 
 Vector = Union[float, list[float]]
 FaceKind = Literal["free", "slip", "fixed"]
@@ -172,6 +173,17 @@ class MPMNumerics(SharedNumerics):
         "numerics.shape = 'gimp' an air body at rest is otherwise unstable (docs/theory/cfdmp.md); 0: absolute stresses"))
 
 
+class MPMMethodNumerics(MPMNumerics):
+    """The mpm method's numerics: MPMNumerics and the devices the particles are spread over."""
+
+    devices: Devices = Field(1, description=(
+        "devices (GPUs of this machine; an integer >= 1) the particle pool is spread over in equal parts, "
+        "stepped together as one program: each device maps its particles to the grid, the nodal sums are added "
+        "across devices, every device updates the (whole) grid and moves its own particles; the pool "
+        "(numerics.capacity) is rounded up to a multiple of it. 'all': every device JAX sees. Results agree "
+        "with one device's to round-off (the nodal sums are added in another order)"))
+
+
 class Tracers(Strict):
     """Points of the structures whose displacement history is recorded (a plate's centre, a slab's back face)."""
 
@@ -271,7 +283,7 @@ class MPMScenario(ScenarioBase):
         default_factory=dict, description="per-material overrides of library constants, e.g. "
                                           "{copper-ofhc = {A = 9.0e7}}")
     gravity: list[float] = Field(default_factory=list, max_length=3, description="body force per unit mass [m/s^2]")
-    numerics: MPMNumerics = MPMNumerics()
+    numerics: MPMMethodNumerics = MPMMethodNumerics()
     output: MPMOutput = MPMOutput()
     sweep: Optional[MPMSweep] = None
 
