@@ -90,6 +90,32 @@ def test_shock_reflecting_off_a_wall_keeps_the_normal_reflection(scheme, limitin
             assert abs(last - 1.0) < 0.015, (scheme, limiting, ps, last)
 
 
+def test_acoustic_pair_limited_in_characteristic_variables_except_at_a_contact():
+    """hllc.cell_slopes by hand on one cell of a two-material row (products | air layout: rho_0, rho_1, u, p,
+    alpha, rho e, c^2): jumps of p (1, 3) and u (0.5, -1) with Z = rho c = 2 limit as
+    w+ = p + Z u: (2, 1) -> van Leer 4/3, w- = p - Z u: (0, 5) -> 0, so Delta p = 2/3, Delta u = 1/3
+    (characteristic); with the products fraction spreading over the stencil (a contact) and with
+    numerics.limiting = "primitive" they are van Leer's of each row: Delta p = 1.5, Delta u = 0."""
+    import jax.numpy as jnp
+
+    from blastfsi import euler
+    from blastfsi.euler import hllc
+    from blastfsi.euler.config import Layout
+    lay = Layout(2, 1)
+    p = jnp.asarray([0.0, 0.0, 1.0, 4.0, 4.0, 4.0])  # cells -2..3 of a 2-cell grid (NG = 2): the cell of
+    u = jnp.asarray([0.0, 0.0, 0.5, -0.5, -0.5, -0.5])  # interest is cell -1+1 = index 2 of the slopes' 0..3
+    rho = jnp.full(6, 2.0)  # both phases 2 kg/m^3, c^2 = 1: Z = 2
+    rows = lambda alpha: (rho, rho, u, p, alpha, jnp.ones(6), jnp.ones(6))  # noqa: E731
+    pure, contact = jnp.full(6, 1e-9), jnp.asarray([0.0, 0.0, 0.0, 0.5, 1.0, 1.0])
+    for characteristic, alpha, want in ((True, pure, (2 / 3, 1 / 3)), (True, contact, (1.5, 0.0)),
+                                        (False, pure, (1.5, 0.0))):
+        cfg = euler.Config((2,), 1.0, 0, ((euler.OUTFLOW, euler.OUTFLOW),), euler.HLLC_MUSCL, 2, (0.0,),
+                           characteristic=characteristic)
+        slopes = hllc.cell_slopes(rows(alpha), 5, cfg, lay, 0)
+        got = (float(slopes[3][1]), float(slopes[2][1]))  # (Delta p, Delta u) of cell 0
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15, err_msg=str((characteristic, alpha)))
+
+
 def test_sod_l1_error_within_the_smearing_bound():
     """Both schemes at 200 cells. A captured discontinuity spreads over a few cells, so the
     L1 density error is bounded by (about 5 cells) x dx x (total variation of the exact

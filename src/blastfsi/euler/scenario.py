@@ -175,10 +175,10 @@ class Numerics(SharedNumerics):
         "diffusive) or mc (monotonized central, the sharpest); ignored by lax-wendroff"))
     limiting: Limiting = Field("characteristic", description=(
         "what the limiter of hllc-muscl and hllc-hancock is applied to: characteristic (default): the normal "
-        "velocity and the pressure through the acoustic characteristic variables p +- rho c u, the other rows "
-        "each on its own; primitive: every primitive row on its own (a shock reflecting off a wall then "
-        "overshoots the normal reflection in the wall cell, by ~19 % at 9.6 bar overpressure; kept to reproduce "
-        "earlier results); ignored by lax-wendroff"))
+        "velocity and the pressure through the acoustic characteristic variables p +- rho c u (at a "
+        "products-air contact each on its own), the other rows each on its own; primitive: every primitive row "
+        "on its own (a shock reflecting off a wall then overshoots the normal reflection in the wall cell, by "
+        "~19 % at 9.6 bar overpressure; kept to reproduce earlier results); ignored by lax-wendroff"))
     devices: Devices = Field(1, description=(
         "devices (GPUs of this machine; an integer >= 1) the grid is split across, along x in equal slabs "
         "(grid.cells divisible by it), stepped together as one program that exchanges the slabs' boundary "
