@@ -8,6 +8,9 @@ float64); parameters are cast to it.
 """
 from __future__ import annotations
 
+import functools
+
+import jax
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry, hancock, hllc, lax_wendroff
@@ -110,6 +113,18 @@ def step(U, dt, params: Params, cfg: Config, t=None):
     (``params.blast``) its layer is then set at t + dt (:func:`with_blast`)."""
     lay, eos_r = _setup(U, params, cfg)
     return with_blast(_kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay), t, dt, params, cfg)
+
+
+@functools.partial(jax.jit, static_argnums=(3,))
+def advance_to(U, params: Params, t_end, cfg: Config):
+    """``U`` advanced from t = 0 to ``t_end`` at the stable step (:func:`stable_dt`; the last step shortened
+    onto t_end), in one compiled loop: the kernels' own time loop, without output (the runs' loop, with
+    output, gauges and faults, is :func:`blastfsi.timeloop.run_until`)."""
+    def body(state):
+        V, t = state
+        dt = jnp.minimum(stable_dt(V, params, cfg), t_end - t)
+        return step(V, dt, params, cfg), t + dt
+    return jax.lax.while_loop(lambda s: s[1] < t_end, body, (U, jnp.zeros((), U.dtype)))[0]
 
 
 def with_blast(U, t, dt, params: Params, cfg: Config):
