@@ -94,7 +94,7 @@ def row_sum(a):
     return functools.reduce(operator.add, [a[..., k] for k in range(a.shape[-1])])
 
 
-GRID_AXIS = "x"  # the mesh axis the Eulerian grid's first axis is split along (grid_sharding)
+SPLIT_AXIS = "x"  # the mesh axis an array is split along (split_sharding: a grid's x, a particle pool)
 
 
 def visible_devices() -> int:
@@ -117,15 +117,16 @@ def device_count(requested, key: str = "numerics.devices") -> int:
     return n
 
 
-def grid_sharding(n_devices: int, ndim: int, axis: int = 0):
-    """The placement of an array of ``ndim`` axes whose ``axis`` is a grid's first axis (x), split in
-    ``n_devices`` equal slabs over the first ``n_devices`` devices (a 1D mesh, axis GRID_AXIS), the other
-    axes whole; None for one device (the default placement). Under ``jit`` a computation on such arrays
-    runs SPMD: each device steps its slab, and the compiler exchanges the halo cells the stencils read
-    across slab boundaries (collective permutes)."""
+def split_sharding(n_devices: int, ndim: int, axis: int = 0):
+    """The placement of an array of ``ndim`` axes split along ``axis`` in ``n_devices`` equal parts over the
+    first ``n_devices`` devices (a 1D mesh, axis SPLIT_AXIS), the other axes whole; None for one device (the
+    default placement). Under ``jit`` a computation on such arrays runs SPMD: each device computes its part,
+    and the compiler adds the communication the computation needs: an Eulerian grid split along x exchanges
+    the halo cells its stencils read (collective permutes); a particle pool split along its slots adds the
+    per-device nodal sums of a particle-to-grid transfer (all-reduces)."""
     if n_devices <= 1:
         return None
-    mesh = jax.sharding.Mesh(jax.devices()[:n_devices], (GRID_AXIS,))
+    mesh = jax.sharding.Mesh(jax.devices()[:n_devices], (SPLIT_AXIS,))
     spec = [None] * ndim
-    spec[axis] = GRID_AXIS
+    spec[axis] = SPLIT_AXIS
     return jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec(*spec))

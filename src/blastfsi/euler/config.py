@@ -36,7 +36,7 @@ class Config(NamedTuple):
     (split MUSCL-Hancock); n_materials: 1, or 2 for [products, air]; origin:
     lower corner of the grid [m]; limiter: the slope limiter of the two HLLC
     schemes, 0 van Leer, 1 minmod, 2 monotonized central (unused by Lax-Wendroff); devices: the
-    devices the grid is split across along axis 0 (:func:`blastfsi.xla.grid_sharding`; 1: not split);
+    devices the grid is split across along axis 0 (:func:`blastfsi.xla.split_sharding`; 1: not split);
     characteristic: the HLLC schemes limit the normal velocity and the pressure in acoustic characteristic
     variables (True) or each on its own (:func:`blastfsi.euler.hllc.cell_slopes`).
     """

@@ -79,13 +79,13 @@ def devices(sc: EulerScenario) -> int:
 
 def placed(s: State, cfg) -> State:
     """``s`` with its grid-shaped leaves (U and the blast maps) constrained to the split of the grid across
-    cfg.devices devices along x (:func:`blastfsi.xla.grid_sharding`); unchanged on one device. Inside the
+    cfg.devices devices along x (:func:`blastfsi.xla.split_sharding`); unchanged on one device. Inside the
     compiled loop: the compiler partitions every computation on them by slab and exchanges halos."""
     if cfg.devices <= 1:
         return s
     ndim = len(cfg.shape)
-    grid = xla.grid_sharding(cfg.devices, ndim)
-    rows = xla.grid_sharding(cfg.devices, ndim + 1, axis=1)
+    grid = xla.split_sharding(cfg.devices, ndim)
+    rows = xla.split_sharding(cfg.devices, ndim + 1, axis=1)
     keep = jax.lax.with_sharding_constraint
     return s._replace(U=keep(s.U, rows), **{k: keep(getattr(s, k), grid) for k in blast_maps.BlastMaps._fields})
 

@@ -74,13 +74,13 @@ class Static(NamedTuple):
 
 def placed(s: State, devices: int) -> State:
     """``s`` with its particle arrays constrained to the split of the pool over ``devices`` devices in equal
-    parts (:func:`blastfsi.xla.grid_sharding` along the pool's axis); unchanged on one device. Inside the
+    parts (:func:`blastfsi.xla.split_sharding` along the pool's axis); unchanged on one device. Inside the
     compiled loop every particle computation runs where its particle lies; the particle-to-grid sums are
     partial sums per device that the compiler adds across devices (an all-reduce of the nodal arrays), the
     grid update runs on every device, and the grid-to-particle step reads the (replicated) nodes locally."""
     if devices <= 1:
         return s
-    P = jax.tree_util.tree_map(lambda a: jax.lax.with_sharding_constraint(a, xla.grid_sharding(devices, a.ndim)),
+    P = jax.tree_util.tree_map(lambda a: jax.lax.with_sharding_constraint(a, xla.split_sharding(devices, a.ndim)),
                                s.mpm.particles)
     return s._replace(mpm=s.mpm._replace(particles=P))
 
