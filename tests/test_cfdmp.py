@@ -308,7 +308,7 @@ def test_he_slab_3d_runs_and_closes_its_mass_budget():
     a 5 mm grid smears the thin shocked layer -- but within a factor 2 of it (measured 15.7 MPa)."""
     res = blastfsi.run("he-slab-3d", set={"output.fields": 0, "output.plots": False})
     s = res.summary
-    assert s["coupled_faces"] == ["lower x"] and s["time"] == pytest.approx(2.0e-5)
+    assert s["coupled_faces"] == ["lower x"] and s["time"] == pytest.approx(res.scenario.time.end)
     assert s["pool_growths"] == 0  # the default pool holds the bridge's particles: one compilation (DESIGN.md)
     assert_budget_closed(s, 1e-13)
     g1, g2 = s["gauges"]

@@ -282,3 +282,39 @@ def test_bad_plane_charge_is_refused():
         blastfsi.run(data)
     with pytest.raises(ScenarioError, match="2D Cartesian"):
         blastfsi.run({**plane_charge(), "domain": {"geometry": "cartesian", "lower": [-0.3], "upper": [0.3]}})
+
+
+def test_automatic_remap_moves_earlier_when_the_shock_foot_would_cross_a_face():
+    """On a grid fine against the 1D air zone (dx = 0.5 mm, zones 2 mm) the 1D shock's disturbed foot runs
+    ahead of its 1 %-p0 level by more than margin_cells dx: remapped at the 1 % rule's time, its ball would
+    cross the outflow face, which the remap refuses. The automatic time then is the time the foot
+    (rm.DISTURBED) reaches R_lim less one 1D air zone, and the remap keeps the ball inside."""
+    from blastfsi.detonation import charge as ch
+    from blastfsi.euler import problem as pe
+    from blastfsi.materials.gases import GASES
+    from blastfsi.scenario import parse
+
+    air = GASES["air"]
+    data = {"method": "euler", "name": "t-fine-remap", "domain": {"geometry": "spherical", "lower": [0.0],
+                                                                   "upper": [0.3]},
+            "boundaries": {"x": ["axis", "outflow"]}, "grid": {"cells": 600},
+            "initial": {"kind": "charge", "radius": 0.02}, "time": {"end": 1e-3},
+            "output": {"history_samples": 2, "fields": 0, "plots": False}}
+    info = pe.build(parse(data)).charge
+    h = info.one_d_air_zone
+    assert h == pytest.approx(10.0 * 0.02 / 100, rel=1e-12)  # air_ratio R / cells (defaults)
+    assert info.limit_radius == pytest.approx(0.3 - 3 * 0.0005, rel=1e-12)
+    # the premise: at the 1 % rule's time the foot is already past the face
+    gas = {"gamma": air.gamma, "pressure": air.pressure, "density": air.density}
+    one_d = ch.Detonation1D(ch.one_d_scenario("tnt", 0.02, 100, 10.0, 1.5 * info.limit_radius + 0.2, 1e-3, gas,
+                                              [info.limit_radius], 0.01))
+    one_d.advance_to(1e-3)
+    t_one_percent = one_d.arrival(0)
+    assert t_one_percent is not None and info.remap_time < t_one_percent
+    one_d = ch.Detonation1D(ch.one_d_scenario("tnt", 0.02, 100, 10.0, 1.5 * info.limit_radius + 0.2,
+                                              t_one_percent, gas, [info.limit_radius], 0.01))
+    one_d.advance_to(t_one_percent)
+    assert rm.disturbed_radius(one_d.profile(), air.density, air.pressure / air.eos_params().omega) > 0.3
+    # the remap: the disturbed ball, read at 1D zone edges, ends within one zone of R_lim - h, inside the face
+    assert abs(info.remap_radius - (info.limit_radius - h)) <= h and info.remap_radius < 0.3
+    assert abs(info.remap_mass_error) < 1e-12 and abs(info.remap_energy_error) < 1e-12

@@ -13,8 +13,13 @@ Remap time: ``initial.remap_time``, or automatically the arrival time
     R_lim = min(distance to the nearest gauge, distance to the nearest face that is
             not a mirror plane through the centre) - margin_cells dx,
 
-found by a first 1D run with a gauge at R_lim; a second run stops there. A given
-remap time whose disturbed ball already crosses a non-mirror face, or leaves the
+found by a first 1D run with a gauge at R_lim; a second run stops there. On a fine grid the 1D
+shock's foot (the zones disturbed by more than :data:`~blastfsi.detonation.remap.DISTURBED` of
+ambient, the level of the remap's own disturbed-ball check) can run ahead of its
+``arrival_fraction`` level by more than margin_cells dx (0.3 to 4 air zones of the 1D run,
+more as the shock weakens) and cross a face by then; the remap time is then the time that foot
+reaches R_lim less one 1D air zone h (the disturbed ball is read at zone edges), which keeps it
+inside. A given remap time whose disturbed ball already crosses a non-mirror face, or leaves the
 1D domain, is refused (ScenarioError).
 
 Hemisphere (a surface burst, KB "surface"): its centre lies on a wall/symmetry
@@ -158,6 +163,20 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
                             f"leaves no room for the remap outside the charge (radius {radius_1d:.4g} m) with "
                             f"margin_cells = {sc.initial.margin_cells}")
     return r_lim
+
+
+def arrival_time(init, hx, mass_full: float, radius: float, gas: dict, length: float, c0: float, j: int,
+                 r_probe: float, level: float) -> float:
+    """The time the 1D blast's overpressure first exceeds ``level`` p0 at ``r_probe`` (a 1D run with a gauge
+    there, to the end times of :func:`probe_times`); ScenarioError if it never does."""
+    for t_probe in probe_times(init.explosive, mass_full, r_probe, c0, radius / hx.detonation_velocity, j):
+        probe = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length, t_probe,
+                                            gas, [r_probe], level, j))
+        probe.advance_to(t_probe)
+        if probe.arrival(0) is not None:
+            return probe.arrival(0)
+    raise ScenarioError(f"initial.remap_time: the 1D blast never reached the limit radius {r_probe:.4g} m; "
+                        "give the remap time")
 
 
 def one_d_scenario(explosive: str, radius: float, cells: int, air_ratio: float, length: float, t_end: float,
@@ -340,46 +359,45 @@ def charge_initial(sc, g) -> ChargeFields:
     mass_full = charge_mass(radius, hx.density, j)
     r_lim = limit_radius(sc, g, centre, mirrors, radius)
     gas = {"gamma": air.gamma, "pressure": p_a, "density": rho_a}
-    length = 1.5 * r_lim + 10.0 * radius
     c0 = np.sqrt(air.gamma * p_a / rho_a)
     mask = layer_mask(sc, g)
-    if init.remap_time is None:
-        t_remap = None
-        for t_probe in probe_times(init.explosive, mass_full, r_lim, c0, radius / hx.detonation_velocity, j):
-            probe = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length, t_probe,
-                                                gas, [r_lim], sc.output.arrival_fraction, j))
-            probe.advance_to(t_probe)
-            t_remap = probe.arrival(0)
-            if t_remap is not None:
-                break
-        if t_remap is None:
-            raise ScenarioError("initial.remap_time: the 1D blast never reached the limit radius "
-                                f"{r_lim:.4g} m; give the remap time")
-    else:
-        t_remap = init.remap_time
-    if sc.time.end <= t_remap:
-        raise ScenarioError(f"time.end = {sc.time.end:g} s counts from the detonation and must lie after the remap "
-                            f"time {t_remap:.6g} s (the blast reaches the limit radius {r_lim:.4g} m then)")
-    if mask.any():  # the 1D run goes on to time.end and must reach beyond the farthest layer cell
-        far = float(np.max(np.sqrt(sum((m[mask] - c) ** 2 for m, c in zip(g.mesh(), centre)))))
-        length = max(length, far + g.dx + 1.5 * c0 * (sc.time.end - t_remap) + 10.0 * radius)
-    # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
-    # (without a blast layer: the probe's zoning and gauge, the same compiled 1D loop)
-    t_start = max(t_remap, 1e-12)
-    one_d = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length,
-                                        sc.time.end if mask.any() else t_start, gas, [r_lim],
-                                        sc.output.arrival_fraction, j))
-    one_d.advance_to(t_start)
-    setup, profile = one_d.setup, one_d.profile()
-    r_dist = rm.disturbed_radius(profile, rho_a, p_a / air.eos_params().omega)
-    if r_dist >= 0.99 * length:
-        raise ScenarioError(f"initial.remap_time = {t_remap:g} s: the blast has left the 1D domain by then")
     edges = tuple(lo + np.arange(n + 1) * g.dx for lo, n in zip(g.lower, g.shape))
-    try:
-        out = rm.remap(profile, edges, d.geometry, centre, mirrors, rho_a, p_a, hx.eos_params(), air.eos_params(),
-                       n_sub=init.sub_cells, r_max=r_dist)
-    except rm.RemapError as err:
-        raise ScenarioError(f"initial.remap_time = {t_remap:g} s: {err}") from None
+    air_zone = init.air_ratio * radius / init.cells
+    # the remap time's rules, in turn (module docstring): (gauge radius, its overpressure level / p0)
+    rules = [(r_lim, sc.output.arrival_fraction)]
+    if init.remap_time is None and r_lim - air_zone > radius:
+        rules.append((r_lim - air_zone, rm.DISTURBED))
+    refused = None
+    for r_probe, level in rules:
+        length = 1.5 * r_lim + 10.0 * radius
+        t_remap = init.remap_time if init.remap_time is not None else \
+            arrival_time(init, hx, mass_full, radius, gas, length, c0, j, r_probe, level)
+        if sc.time.end <= t_remap:
+            raise ScenarioError(f"time.end = {sc.time.end:g} s counts from the detonation and must lie after the "
+                                f"remap time {t_remap:.6g} s (the blast reaches the limit radius {r_lim:.4g} m then)")
+        if mask.any():  # the 1D run goes on to time.end and must reach beyond the farthest layer cell
+            far = float(np.max(np.sqrt(sum((m[mask] - c) ** 2 for m, c in zip(g.mesh(), centre)))))
+            length = max(length, far + g.dx + 1.5 * c0 * (sc.time.end - t_remap) + 10.0 * radius)
+        # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
+        # (without a blast layer: the probe's zoning and gauge, the same compiled 1D loop)
+        t_start = max(t_remap, 1e-12)
+        one_d = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length,
+                                            sc.time.end if mask.any() else t_start, gas, [r_probe], level, j))
+        one_d.advance_to(t_start)
+        setup, profile = one_d.setup, one_d.profile()
+        r_dist = rm.disturbed_radius(profile, rho_a, p_a / air.eos_params().omega)
+        if r_dist >= 0.99 * length:
+            raise ScenarioError(f"initial.remap_time = {t_remap:g} s: the blast has left the 1D domain by then")
+        try:
+            out = rm.remap(profile, edges, d.geometry, centre, mirrors, rho_a, p_a, hx.eos_params(),
+                           air.eos_params(), n_sub=init.sub_cells, r_max=r_dist)
+        except rm.RemapError as err:
+            refused = ScenarioError(f"initial.remap_time = {t_remap:g} s: {err}")
+            continue
+        refused = None
+        break
+    if refused is not None:
+        raise refused from None
     eos = np.array([list(hx.eos_params()), list(air.eos_params())], float)
     mass = mass_full * out.share if hemi else mass_full
     kb_burst = None if j == 1 else "surface" if hemi else "free-air"
@@ -397,7 +415,7 @@ def charge_initial(sc, g) -> ChargeFields:
     info = ChargeRemap(remap_time=float(t_remap), remap_radius=float(r_dist), limit_radius=float(r_lim),
                       charge_radius=float(radius), charge_mass=float(mass), charge_center=tuple(centre.tolist()),
                       kb_burst=kb_burst, one_d_zones=int(setup.cells),
-                      one_d_air_zone=float(init.air_ratio * radius / init.cells), remap_share=out.share,
+                      one_d_air_zone=float(air_zone), remap_share=out.share,
                       **errors, **layer)
     alpha = np.stack([out.alpha, 1.0 - out.alpha])  # (n_materials, *shape), the layout of the euler Setup
     return ChargeFields((init.explosive, air_name), (hx, air), eos, out.rho_k, alpha, out.velocity, out.pressure,

@@ -89,8 +89,11 @@ def profile_from_lagrangian(x, v, e, zone_mass, explosive_zones: int, j: int) ->
     return Profile1D(np.asarray(x, float), m, prod, mom, m * np.asarray(e, float) + kin, j)
 
 
+DISTURBED = 1e-6  # relative departure from ambient that counts as disturbed (density, energy density, pressure)
+
+
 def disturbed_radius(profile: Profile1D, ambient_density: float, ambient_pressure_energy: float,
-                     rel: float = 1e-6) -> float:
+                     rel: float = DISTURBED) -> float:
     """Outer edge of the last zone whose density or energy density differs from ambient by > rel."""
     vol = shell_measures(profile.edges, profile.j)
     rho = profile.mass / vol

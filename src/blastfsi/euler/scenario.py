@@ -84,7 +84,8 @@ class ChargeInitial(Strict):
     ambient: Optional[GasState] = Field(None, description="ambient gas at rest; default the library's air")
     remap_time: Optional[float] = Field(None, ge=0.0, description=(
         "time after lighting at which the 1D solution is remapped [s]; default: when the blast reaches the "
-        "nearest gauge or non-mirror boundary less margin_cells"))
+        "nearest gauge or non-mirror boundary less margin_cells (earlier if the 1D shock's foot would then "
+        "already cross a face)"))
     cells: int = Field(100, ge=10, le=100_000, description="1D zones across the charge radius (width h = R / cells)")
     air_ratio: float = Field(10.0, ge=1.0, le=1e4, description=(
         "1D air zones: uniform, air_ratio h wide (the first one at most R / 4; lagrangian1d grid.first_ratio = "
