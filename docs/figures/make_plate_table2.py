@@ -14,7 +14,8 @@ the test rig's clamp:
 Each run is its own process (``one``) and writes ``DIR/case<k>-<clamp>[-c<cells>].json``: the centre's
 deflection history (the tracer at mid-thickness on the axis), its peak and when, the last value, the steps, the
 loop time and the mass/energy budget residuals. ``--cells`` overrides the grid (the three-grid study of case 1:
-80, 120, 180 cells = 3.75, 2.5, 1.67 mm). ``run`` skips runs whose JSON exists.
+90, 120, 180 cells = 3.33, 2.5, 1.67 mm; the cell must divide 10 mm, which the plate's faces, its clamp and the
+MPM box's lower face are multiples of). ``run`` skips runs whose JSON exists.
 """
 from __future__ import annotations
 
