@@ -367,8 +367,8 @@ def charge_initial(sc, g) -> ChargeFields:
     rules = [(r_lim, sc.output.arrival_fraction)]
     if init.remap_time is None and r_lim - air_zone > radius:
         rules.append((r_lim - air_zone, rm.DISTURBED))
-    refused = None
-    for r_probe, level in rules:
+    far = float(np.max(np.sqrt(sum((m[mask] - c) ** 2 for m, c in zip(g.mesh(), centre))))) if mask.any() else 0.0
+    for k, (r_probe, level) in enumerate(rules):
         length = 1.5 * r_lim + 10.0 * radius
         t_remap = init.remap_time if init.remap_time is not None else \
             arrival_time(init, hx, mass_full, radius, gas, length, c0, j, r_probe, level)
@@ -376,7 +376,6 @@ def charge_initial(sc, g) -> ChargeFields:
             raise ScenarioError(f"time.end = {sc.time.end:g} s counts from the detonation and must lie after the "
                                 f"remap time {t_remap:.6g} s (the blast reaches the limit radius {r_lim:.4g} m then)")
         if mask.any():  # the 1D run goes on to time.end and must reach beyond the farthest layer cell
-            far = float(np.max(np.sqrt(sum((m[mask] - c) ** 2 for m, c in zip(g.mesh(), centre)))))
             length = max(length, far + g.dx + 1.5 * c0 * (sc.time.end - t_remap) + 10.0 * radius)
         # t_remap = 0: the unburnt charge, lit at 1e-12 s (the "artificial detonation" of 000 Sec. 4.1)
         # (without a blast layer: the probe's zoning and gauge, the same compiled 1D loop)
@@ -391,13 +390,10 @@ def charge_initial(sc, g) -> ChargeFields:
         try:
             out = rm.remap(profile, edges, d.geometry, centre, mirrors, rho_a, p_a, hx.eos_params(),
                            air.eos_params(), n_sub=init.sub_cells, r_max=r_dist)
+            break
         except rm.RemapError as err:
-            refused = ScenarioError(f"initial.remap_time = {t_remap:g} s: {err}")
-            continue
-        refused = None
-        break
-    if refused is not None:
-        raise refused from None
+            if k + 1 == len(rules):
+                raise ScenarioError(f"initial.remap_time = {t_remap:g} s: {err}") from None
     eos = np.array([list(hx.eos_params()), list(air.eos_params())], float)
     mass = mass_full * out.share if hemi else mass_full
     kb_burst = None if j == 1 else "surface" if hemi else "free-air"
