@@ -45,6 +45,7 @@ CASES = {
                          [(1.0,), (1.0, 0.5, 0.25, 0.125, 0.0625)]),
     "GAS_PIC_FRACTION": ("key:numerics.gas_pic_fraction", 0.05, [0.0, 0.2]),
     "GROWTH": ("blastfsi.simulation", 1.25, [1.1, 2.0]),
+    "CUT_TOLERANCE": ("blastfsi.cfdmp.coupling", 1e-6, [0.0, 1e-4]),
 }
 # overrides that every run of a constant gets (its shipped value then has a run of its own): he-slab-2d's default
 # pool (numerics.pool_headroom = 1.5) never fills before its end, so GROWTH is measured with a pool that does

@@ -71,16 +71,19 @@ def _cfdmp_box(geometry):
     return {"method": "cfdmp", "name": "rest", "domain": domain, "boundaries": bounds, "grid": {"cells": n},
             "initial": {"kind": "riemann", "diaphragm": 0.002, "left": AIR, "right": AIR},
             "mpm_region": {"lower": box[0], "upper": box[1], "activation_overpressure": 0.0, "bridge_cells": 2},
-            "time": {"end": 1.8e-3}, "output": {"history_samples": 3, "fields": 0, "plots": False}}
+            "time": {"end": 1.8e-3 if geometry == "3d" else 6.0e-3},
+            "output": {"history_samples": 3, "fields": 0, "plots": False}}
 
 
 @pytest.mark.parametrize("geometry", [pytest.param(g, marks=pytest.mark.slow) for g in ("2d", "3d")])
 def test_gas_at_rest_stays_at_rest_in_a_cfdmp_box(geometry):  # (slow: tests/test_cfdmp.py's gas at rest stays)
-    """Air at 1 bar in a cfdmp box (absolute stresses, GIMP, the default gas PIC share), ~3000 steps. With the
-    particles' own GIMP gradient this 2D layout reached 9.7 m/s and a 3 % pressure error after 3092 steps.
-    Round-off bound as above (measured 4.3e-11 m/s after 18 787 steps, 2D)."""
+    """Air at 1 bar in a cfdmp box (absolute stresses, GIMP, the default gas PIC share and cfl): 10^4 steps in
+    2D, ~3000 in 3D. With the particles' own GIMP gradient this 2D layout reached 9.7 m/s and a 3 % pressure
+    error after 3092 steps. With the cell-centre gradient but the particles that touch a coupled face cut for
+    the round-off of their motion (coupling.CUT_TOLERANCE = 0) it still ran away at 1.003-1.005 per step
+    (0.01 m/s after 8540 steps). Round-off bound as above (measured 3.9e-11 m/s after 10 247 steps, 2D)."""
     res = blastfsi.run(_cfdmp_box(geometry))
-    assert res.summary["steps"] >= 2500
+    assert res.summary["steps"] >= (2500 if geometry == "3d" else 10_000)
     f = res.fields()
     assert np.nanmax(np.abs(f["velocity"])) < 1e-9
     assert np.nanmax(np.abs(f["pressure"] / 1.0e5 - 1.0)) < 1e-12
