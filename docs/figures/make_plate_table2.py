@@ -8,7 +8,7 @@ the test rig's clamp:
 * ``sliding-wide``: as ``sliding`` with the rim widened from 0.12 to 0.2 of the free radius (the plate to the
   edge of the MPM box): how much the rim's hoop compression, which resists the pull-in, matters.
 
-    python docs/figures/make_plate_table2.py run DIR [--cases 1 4] [--clamps fixed sliding] [--cells N]
+    python docs/figures/make_plate_table2.py run DIR [--cases 1 4] [--clamps fixed sliding] [--cells N] [--end T]
     python docs/figures/make_plate_table2.py figures DIR    # plate_table2.json, plate_table2.png here; table
 
 Each run is its own process (``one``) and writes ``DIR/case<k>-<clamp>[-c<cells>].json``: the centre's
@@ -39,7 +39,7 @@ TABLE2 = {"1": (2.60, 2.69, 2.59), "2": (2.70, 2.71, 2.62), "3": (None, 2.68, No
           "4": (4.85, 5.2, 4.98), "5": (5.35, 5.45, 5.24), "6": (None, 5.625, None)}
 
 
-def scenario(case: str, clamp: str, cells: int | None) -> dict:
+def scenario(case: str, clamp: str, cells: int | None, end: float | None = None) -> dict:
     from blastfsi.api import example_data
 
     data = example_data(EXAMPLES[case])
@@ -54,20 +54,23 @@ def scenario(case: str, clamp: str, cells: int | None) -> dict:
                 sup["upper"][0] = edge
     if cells is not None:
         data["grid"]["cells"] = cells
+    if end is not None:
+        data["time"]["end"] = end
     data["output"]["plots"] = False
     data["output"]["fields"] = 0
     data["output"]["checkpoint_interval"] = None
     return data
 
 
-def name(case: str, clamp: str, cells: int | None) -> str:
-    return f"case{case}-{clamp}" + ("" if cells is None else f"-c{cells}")
+def name(case: str, clamp: str, cells: int | None, end: float | None = None) -> str:
+    return (f"case{case}-{clamp}" + ("" if cells is None else f"-c{cells}")
+            + ("" if end is None else f"-e{round(end * 1e6)}us"))
 
 
-def cmd_one(case: str, clamp: str, cells: int | None, folder: Path) -> None:
+def cmd_one(case: str, clamp: str, cells: int | None, folder: Path, end: float | None = None) -> None:
     import blastfsi
 
-    res = blastfsi.run(scenario(case, clamp, cells))
+    res = blastfsi.run(scenario(case, clamp, cells, end))
     s, h = res.summary, res.history
     t = np.asarray(h["time"])
     w = np.asarray(h["tracer0_displacement_y"])
@@ -78,19 +81,19 @@ def cmd_one(case: str, clamp: str, cells: int | None, folder: Path) -> None:
            "mass_residual": s["budget"]["mass_residual_relative"],
            "energy_residual": s["budget"]["energy_residual_relative"],
            "time": t.tolist(), "deflection": w.tolist()}
-    (folder / f"{name(case, clamp, cells)}.json").write_text(json.dumps(out) + "\n")
-    print(f"{name(case, clamp, cells)}: delta/t = {out['peak'] / THICKNESS[case]:.3f} at {out['peak_time'] * 1e3:.3f} ms"
+    (folder / f"{name(case, clamp, cells, end)}.json").write_text(json.dumps(out) + "\n")
+    print(f"{name(case, clamp, cells, end)}: delta/t = {out['peak'] / THICKNESS[case]:.3f} at {out['peak_time'] * 1e3:.3f} ms"
           f" (last {out['last'] / THICKNESS[case]:.3f}), {out['steps']} steps, loop {out['loop_s']} s")
 
 
-def cmd_run(folder: Path, cases, clamps, cells) -> None:
+def cmd_run(folder: Path, cases, clamps, cells, end: float | None = None) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for case in cases:
         for clamp in clamps:
-            if (folder / f"{name(case, clamp, cells)}.json").is_file():
+            if (folder / f"{name(case, clamp, cells, end)}.json").is_file():
                 continue
-            args = [sys.executable, __file__, "one", case, clamp, str(folder)] + ([] if cells is None
-                                                                                 else ["--cells", str(cells)])
+            args = [sys.executable, __file__, "one", case, clamp, str(folder)]
+            args += ([] if cells is None else ["--cells", str(cells)]) + ([] if end is None else ["--end", repr(end)])
             subprocess.run(args, check=True)
 
 
@@ -143,18 +146,20 @@ def main(argv=None) -> int:
     one.add_argument("clamp", choices=CLAMPS)
     one.add_argument("dir", type=Path)
     one.add_argument("--cells", type=int)
+    one.add_argument("--end", type=float)
     run = sub.add_parser("run")
     run.add_argument("dir", type=Path)
     run.add_argument("--cases", nargs="+", default=["1", "4"], choices=sorted(EXAMPLES))
     run.add_argument("--clamps", nargs="+", default=["fixed", "sliding"], choices=CLAMPS)
     run.add_argument("--cells", type=int)
+    run.add_argument("--end", type=float, help="time.end [s] (default: the example's; the sliding clamp peaks later)")
     fig = sub.add_parser("figures")
     fig.add_argument("dir", type=Path)
     a = p.parse_args(argv)
     if a.cmd == "one":
-        cmd_one(a.case, a.clamp, a.cells, a.dir)
+        cmd_one(a.case, a.clamp, a.cells, a.dir, a.end)
     elif a.cmd == "run":
-        cmd_run(a.dir, a.cases, a.clamps, a.cells)
+        cmd_run(a.dir, a.cases, a.clamps, a.cells, a.end)
     else:
         cmd_figures(a.dir)
     return 0
