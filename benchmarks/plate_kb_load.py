@@ -50,7 +50,7 @@ def main(kind: str, cells_per_t: int, factor: float = 1.0, mass: float = 0.468, 
         x = np.asarray(P.x)
         r = x[:, 0] if kind == "rz" else np.hypot(x[:, 0], x[:, 1])
         vz = np.zeros(len(r))
-        free = (r < mps.A_FREE) & np.asarray(P.active) & ~np.asarray(P.prescribed)[:, 0]
+        free = (r < mps.A_FREE) & np.asarray(P.active) & ~np.any(np.asarray(P.prescribed), axis=1)
         vz[free] = factor * plate_load(mass, STANDOFF, r[free])["impulse"] / (rho * mps.T)
         v = np.array(P.v)
         v[:, 1 if kind == "rz" else 2] = vz
