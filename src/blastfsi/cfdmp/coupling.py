@@ -170,13 +170,12 @@ def mpm_content(P: mpm.Particles, ndim: int):
 
 
 def flat_primitives(U, eos, cfg: ek.Config) -> dict:
-    """rho (N,), velocity (ndim, N), pressure (N,), phase densities rho_k and mass fractions (n, N) of every
-    cell (C order)."""
+    """rho (N,), velocity (ndim, N), pressure (N,), specific internal energy (N,) and mass fractions (n, N) of
+    every cell (C order)."""
     lay = row_layout(cfg)
     rows = tuple(U.reshape(U.shape[0], -1))
     st = cell_state(rows, eos_rows(eos, lay.n), lay)
-    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "rho_k": jnp.stack(st.rho_k),
-            "internal_energy": st.rho_e / st.rho,
+    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "internal_energy": st.rho_e / st.rho,
             "mass_fraction": jnp.stack([rows[k] / st.rho for k in range(lay.n)])}
 
 
@@ -419,7 +418,7 @@ def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, volume):
     return jnp.stack(new).reshape(U.shape)
 
 
-def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Static, layout: Layout):
+def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, static: Static, layout: Layout):
     """The scheme's transfers through the coupled faces (module docstring): inflow into the reservoirs;
     through an outflow face the Eulerian cell keeps the scheme's transfer and its convective part is booked
     as a debt of the face's reservoir, which the deleted particles repay (:func:`remove_leaving`); then
@@ -707,8 +706,8 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     # ~1e-200 kg); traces wait in the reservoir
     m_gas = prim_flat["rho"][layout.face_in] * layout.face_measure / ppc ** d
     present = jnp.stack([prim_flat["mass_fraction"][k][layout.face_in] for k in range(n)], axis=1) >= PRESENT
-    fed = (res.mass >= FEED_FRACTION * m_gas[:, None]) & present & (rho > 0.0) & jnp.isfinite(rho)
-    fed = fed | (has & (res.mass > 0.0) & (rho > 0.0))
+    fed = (res.mass >= FEED_FRACTION * m_gas[:, None]) & present
+    fed = fed | (has & (res.mass > 0.0))
     m = m_old + jnp.where(fed, res.mass, 0.0)
     safe = jnp.where(m > 0.0, m, 1.0)
     v = (m_old[..., None] * v_old + jnp.where(fed[..., None], res.momentum, 0.0)) / safe[..., None]
