@@ -318,43 +318,56 @@ def test_he_slab_3d_runs_and_closes_its_mass_budget():
     assert s["structures"]["max_damage"] == 1.0 and s["structures"]["mass_left_the_box"] == 0.0
 
 
-def test_every_material_takes_the_cell_state():
-    """Every material's gas takes the cell's density and specific internal energy (``coupling.cell_phases``):
-    the particles made from a cell then fill its volume and carry its internal energy exactly, whatever the
-    composition. Cells: a products trace in air (the he-slab-2d cell whose trace phase state overflowed,
-    1e-124 kg/m3 at a volume fraction of 1e-36), a resolved mixture, and a diffused contact as measured in
-    steel-plate-blast 10 us after detonation (products fraction 0.372 at a phase density of 345 kg/m3, air
-    at 0.58 kg/m3): there the isobaric split gives the products a negative internal energy and the air
-    ~1e8 J/kg, which as particles set the step."""
+def test_every_material_takes_the_cell_density_at_one_pressure():
+    """Every material's gas takes the cell's density and a share of its internal energy that puts all at one
+    pressure p' > 0 (``coupling.cell_phases``): the particles made from a cell then fill its volume and carry its
+    internal energy exactly, whatever the composition. Cells: a products trace in air (the he-slab-2d cell
+    whose trace phase state overflowed, 1e-124 kg/m3 at a volume fraction of 1e-36), a resolved mixture, and
+    two diffused contact cells as measured in steel-plate-blast 10 and 8 us after detonation (products
+    fractions 0.372 and 0.22 at phase densities of 345 and 637 kg/m3, air at 0.58 and 0.94 kg/m3): there the
+    isobaric split gives the products a negative internal energy and the air ~1e8 J/kg, which as particles
+    set the step. In the second the cell's specific energy itself is negative: no state at the cell's
+    density has a positive pressure (air given the cell's e would have a negative one), and the isobaric
+    split stands."""
     import jax.numpy as jnp
 
     from blastfsi import euler
     from blastfsi.cfdmp import coupling as cp
+    from blastfsi.eos import jwl
     from blastfsi.eos.jwl import ideal_gas_params
     from blastfsi.materials.gases import GASES
 
     eos = jnp.asarray([list(GASES["tnt"].eos_params()), list(ideal_gas_params(1.4))])
-    cfg = euler.Config(shape=(3,), dx=1e-3, geometry=euler.CARTESIAN, bc=((euler.OUTFLOW, euler.OUTFLOW),),
+    cfg = euler.Config(shape=(4,), dx=1e-3, geometry=euler.CARTESIAN, bc=((euler.OUTFLOW, euler.OUTFLOW),),
                        scheme=euler.HLLC_MUSCL, n_materials=2, origin=(0.0,))
-    rho_k = jnp.asarray([[4.787892e-97 / 1.941234e-36, 20.0, 345.0], [1.225, 1.225, 0.581]])
-    alpha = jnp.asarray([1.941234e-36, 0.5, 0.372])
-    p = jnp.asarray([1.0136e5, 2.0e5, 2.23e7])
-    U = euler.conservative(rho_k, alpha, jnp.zeros((1, 3)), p, euler.Params(eos, jnp.asarray(0.5)), cfg)
+    rho_k = jnp.asarray([[4.787892e-97 / 1.941234e-36, 20.0, 345.0, 637.0], [1.225, 1.225, 0.581, 0.935]])
+    alpha = jnp.asarray([1.941234e-36, 0.5, 0.372, 0.22])
+    p = jnp.asarray([1.0136e5, 2.0e5, 2.23e7, 6.47e7])
+    U = euler.conservative(rho_k, alpha, jnp.zeros((1, 4)), p, euler.Params(eos, jnp.asarray(0.5)), cfg)
     prim = cp.flat_primitives(U, eos, cfg)
-    # the isobaric split of the contact cell is not a physical state: products below zero internal energy
     rows = euler.mixture.eos_rows(eos, 2)
-    e_split = [float((p[2] - euler.mixture.cold_pressure(rho_k[k, 2], rows[k])) / (rows[k].omega * rho_k[k, 2]))
-               for k in range(2)]
-    assert e_split[0] < 0.0 and e_split[1] > 5e7
-    rho, e = cp.cell_phases(prim, jnp.arange(3), 2)
+    # the isobaric split of the contact cells is not a physical state: products below zero internal energy
+    for c in (2, 3):
+        e_split = [float((p[c] - euler.mixture.cold_pressure(rho_k[k, c], rows[k])) / (rows[k].omega * rho_k[k, c]))
+                   for k in range(2)]
+        assert e_split[0] < 0.0 and e_split[1] > 5e7
+    assert float(prim["internal_energy"][3]) < 0.0  # the cell's own specific energy
+    rho, e = cp.cell_phases(prim, jnp.arange(4), eos, 2)
     rho, e = np.asarray(jnp.stack(rho)), np.asarray(jnp.stack(e))
-    assert np.all(np.isfinite(rho)) and np.all(np.isfinite(e)) and np.all(e > 0.0)
+    assert np.all(np.isfinite(rho)) and np.all(np.isfinite(e))
     partial = np.asarray(rho_k) * np.stack([np.asarray(alpha), 1.0 - np.asarray(alpha)])
-    volume = np.sum(partial / rho, axis=0)  # the particles' volume per unit cell volume
-    np.testing.assert_allclose(volume, 1.0, rtol=1e-13)
-    internal = np.sum(partial * e, axis=0)  # their internal energy per unit cell volume
+    np.testing.assert_allclose(np.sum(partial / rho, axis=0), 1.0, rtol=1e-13)  # the cell's volume, filled
     rho_e = np.asarray(prim["rho"]) * np.asarray(prim["internal_energy"])
-    np.testing.assert_allclose(internal, rho_e, rtol=1e-13)
+    np.testing.assert_allclose(np.sum(partial * e, axis=0), rho_e, rtol=1e-12)  # its internal energy, carried
+    pressure = np.stack([np.asarray(jwl.pressure(jnp.asarray(rho[k]), jnp.asarray(e[k]), rows[k])) for k in range(2)])
+    assert np.all(pressure > 0.0)
+    np.testing.assert_allclose(pressure[0, 1:], pressure[1, 1:], rtol=1e-10)  # one pressure (cell 0: a trace)
+    assert np.all(e[1] > 0.0)  # the air
+    # cells 1, 2: at the cell's density; cell 3 (no state at its density with p > 0): the isobaric split
+    np.testing.assert_allclose(rho[:, 1:3], np.broadcast_to(np.asarray(prim["rho"])[1:3], (2, 2)), rtol=1e-14)
+    np.testing.assert_allclose(rho[:, 3], np.asarray(rho_k)[:, 3], rtol=1e-12)
+    np.testing.assert_allclose(pressure[:, 3], float(p[3]), rtol=1e-10)
+    assert e[1, 2] < 1e7  # the contact's air at the cell's density: not the split's ~1e8 J/kg
 
 
 def test_settled_debt_keeps_both_phases_positive():

@@ -72,7 +72,7 @@ from blastfsi import mpm
 from blastfsi.constitutive import PointState
 from blastfsi.eos import jwl
 from blastfsi.euler.config import layout as row_layout
-from blastfsi.euler.mixture import cell_state, eos_rows
+from blastfsi.euler.mixture import cell_state, cold_pressure, eos_rows
 from blastfsi.mpm.musl import wave_speed
 from blastfsi.xla import row_sum
 
@@ -170,13 +170,13 @@ def mpm_content(P: mpm.Particles, ndim: int):
 
 
 def flat_primitives(U, eos, cfg: ek.Config) -> dict:
-    """rho (N,), velocity (ndim, N), pressure (N,), specific internal energy (N,) and mass fractions (n, N) of
-    every cell (C order)."""
+    """rho (N,), velocity (ndim, N), pressure (N,), phase densities rho_k (n, N), specific internal energy (N,)
+    and mass fractions (n, N) of every cell (C order)."""
     lay = row_layout(cfg)
     rows = tuple(U.reshape(U.shape[0], -1))
     st = cell_state(rows, eos_rows(eos, lay.n), lay)
-    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "internal_energy": st.rho_e / st.rho,
-            "mass_fraction": jnp.stack([rows[k] / st.rho for k in range(lay.n)])}
+    return {"rho": st.rho, "velocity": jnp.stack(st.velocity), "pressure": st.p, "rho_k": jnp.stack(st.rho_k),
+            "internal_energy": st.rho_e / st.rho, "mass_fraction": jnp.stack([rows[k] / st.rho for k in range(lay.n)])}
 
 
 def _gas_index(static: Static, material):
@@ -371,10 +371,21 @@ def face_transfers(T, static: Static):
     return jnp.concatenate(out, axis=1)
 
 
-def cell_phases(prim_flat: dict, cells, n: int):
+def cell_phases(prim_flat: dict, cells, eos, n: int):
     """The density and specific internal energy that every material's gas takes from ``cells`` (activation,
-    inflow particles, the convective energy of a transfer): the cell's own, the mixture's, for each of the n
-    materials. Returns (rho_k, e_k), lists of n arrays.
+    inflow particles, the convective energy of a transfer). Returns (rho_k, e_k), lists of n arrays.
+
+    Every material takes the cell's density rho and shares its internal energy so that all are at one
+    pressure there: e_k = (p' - f_k(rho)) / (G_k rho), with p' = (rho e + sum_k Y_k f_k(rho) / G_k) /
+    sum_k (Y_k / G_k) (Y_k the mass fractions; the Mie-Grueneisen form p = f(rho) + G rho e of
+    :mod:`blastfsi.eos.jwl`), which is the mixture closure of the Eulerian cells with every phase at the cell's
+    density. So the particles of a cell fill its volume exactly (sum_k m_k / rho = V), carry its internal
+    energy exactly (sum_k Y_k e_k = e) and start in pressure equilibrium at p'; a pure cell gives its own
+    state. Where p' <= 0 (the cell's e < 0: products below their reference isentrope, 13 of 807 mixed bridge
+    cells in the first 24 us of steel-plate-blast) no state at the cell's density has a positive pressure, and
+    each material present (at least PRESENT of the mass) takes its own phase density and the energy that gives
+    it the cell's pressure (the isobaric split below, also exact in volume and energy), a trace the cell's
+    density and e.
 
     Why not each phase's own state (rho_k = alpha_k rho_k / alpha_k and e_k at the cell pressure, the
     five-equation model's isobaric split)? In a numerically diffused products/air contact that split is not
@@ -384,17 +395,23 @@ def cell_phases(prim_flat: dict, cells, n: int):
     -4.7e6 J/kg) and air at 0.2-0.9 kg/m3 with 1e8-1e10 J/kg (the air phase takes the whole internal energy
     of the cell). As particles, that air stayed at 1e8-1e9 J/kg (1e5-1e6 K) for the whole run and, with
     |v| + c up to 27 km/s, set the step (its own sound speed), 1.5-4x below the steel's and the rest of the
-    gas's. A trace material (below PRESENT of the cell's mass) took the mixture state before; so does every
-    material now.
-
-    What the mixture state keeps: the particles of a cell fill its volume exactly (sum_k m_k / rho = V,
-    where the split lost the volume fraction of any trace) and carry its internal energy exactly
-    (sum_k m_k e = rho e V), so mass, momentum, energy and volume carry over whatever the composition. What
-    it gives up: in a mixed cell each material's EOS at (rho, e) gives its own pressure (air's
-    0.4 rho e against the products' f(rho) + 0.3 rho e), and the MPM's pressure relaxation between gas
-    particles that share nodes (:mod:`blastfsi.mpm.relaxation`) brings them to one pressure, at constant
-    volume and energy."""
-    return [prim_flat["rho"][cells]] * n, [prim_flat["internal_energy"][cells]] * n
+    gas's. Nor the cell's specific energy e for every material: with products below their reference
+    isentrope (e < 0) the contact cells' e is negative too, and air at e < 0 has a negative pressure."""
+    rho, e = prim_flat["rho"][cells], prim_flat["internal_energy"][cells]
+    rows = eos_rows(eos, n)
+    y = [prim_flat["mass_fraction"][k][cells] for k in range(n)]
+    f = [cold_pressure(rho, row) for row in rows]
+    p_even = (rho * e + sum(yk * fk / row.omega for yk, fk, row in zip(y, f, rows))) / sum(
+        yk / row.omega for yk, row in zip(y, rows))
+    even = p_even > 0.0
+    # where no state at the cell's density has p > 0: the isobaric split (traces: the cell's state)
+    own = [jnp.where(yk >= PRESENT, prim_flat["rho_k"][k][cells], rho) for k, yk in enumerate(y)]
+    p = prim_flat["pressure"][cells]
+    split = [jnp.where(yk >= PRESENT, (p - cold_pressure(r, row)) / (row.omega * r), e)
+             for yk, r, row in zip(y, own, rows)]
+    rho_k = [jnp.where(even, rho, r) for r in own]
+    e_k = [jnp.where(even, (p_even - fk) / (row.omega * rho), ek) for fk, row, ek in zip(f, rows, split)]
+    return rho_k, e_k
 
 
 def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, volume):
@@ -418,7 +435,7 @@ def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, volume):
     return jnp.stack(new).reshape(U.shape)
 
 
-def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, static: Static, layout: Layout):
+def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, eos, static: Static, layout: Layout):
     """The scheme's transfers through the coupled faces (module docstring): inflow into the reservoirs;
     through an outflow face the Eulerian cell keeps the scheme's transfer and its convective part is booked
     as a debt of the face's reservoir, which the deleted particles repay (:func:`remove_leaving`); then
@@ -431,7 +448,7 @@ def receive(U, res: Reservoirs, budget: Budget, T, prim_flat, static: Static, la
     inflow = jnp.sum(m_k, axis=0) > 0.0
     donor = jnp.where(inflow, layout.face_out, layout.face_in)
     u = prim_flat["velocity"][:, donor]  # (d, F)
-    rho_k, e_k = cell_phases(prim_flat, donor, n)
+    rho_k, e_k = cell_phases(prim_flat, donor, eos, n)
     ke = 0.5 * jnp.sum(u * u, axis=0)
     carried_mom = jnp.sum(m_k, axis=0)[None] * u
     carried_e = jnp.stack([m_k[k] * (e_k[k] + ke) for k in range(n)])  # (n, F)
@@ -694,7 +711,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     P = state.particles
     cap = P.mass.shape[0]
     gm = jnp.asarray(static.gas_material, jnp.int32)
-    rho = jnp.stack(cell_phases(prim_flat, layout.face_in, n)[0], axis=1)  # (F, n)
+    rho = jnp.stack(cell_phases(prim_flat, layout.face_in, eos, n)[0], axis=1)  # (F, n)
     b = jnp.clip(res.buffer, 0, cap - 1)
     near = jnp.all(jnp.abs(P.x[b] - layout.face_centre[:, None, :]) <= 1.01 * h, axis=-1)  # slot not reused
     has = (res.buffer >= 0) & P.active[b] & (P.material[b] == gm[None, :]) & near
@@ -767,7 +784,7 @@ def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: St
     n = cfg.n_materials
     cell = layout.gas_cell
     flat = U.reshape(U.shape[0], -1)[:, cell]  # (nvar, G)
-    rho_k, e_k = cell_phases(prim_flat, cell, n)
+    rho_k, e_k = cell_phases(prim_flat, cell, eos, n)
     u = prim_flat["velocity"][:, cell]  # (d, G)
     G = cell.shape[0]
     mass = jnp.stack([flat[k] * layout.gas_volume for k in range(n)])  # (n, G)

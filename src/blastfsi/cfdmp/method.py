@@ -319,7 +319,7 @@ class Cfdmp:
             U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
             U, budget = _blast_inflow(U, ek.with_blast(U, s.t, dt, params.euler, cfg), budget, lay, cs)
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, budget, cs, lay)
-            U, res, budget = cp.receive(U, res, budget, T, prim, cs, lay)
+            U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
             ms, res, budget = cp.feed(ms, res, budget, cp.flat_primitives(U, eos, cfg), eos, params.mpm, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
