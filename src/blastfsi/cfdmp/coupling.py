@@ -72,7 +72,8 @@ from blastfsi import mpm
 from blastfsi.constitutive import PointState
 from blastfsi.eos import jwl
 from blastfsi.euler.config import layout as row_layout
-from blastfsi.euler.mixture import cell_state, cold_pressure, eos_rows
+from blastfsi.euler.mixture import cell_state, cold_pressure, eos_rows, phase_sums
+from blastfsi.euler.mixture import pressure as mixture_pressure
 from blastfsi.mpm.musl import wave_speed
 from blastfsi.xla import row_sum
 
@@ -401,11 +402,9 @@ def cell_phases(prim_flat: dict, cells, eos, n: int):
     rho, e = prim_flat["rho"][cells], prim_flat["internal_energy"][cells]
     rows = eos_rows(eos, n)
     y = [prim_flat["mass_fraction"][k][cells] for k in range(n)]
-    f = [cold_pressure(rho, row) for row in rows]
-    p_even = (rho * e + sum(yk * fk / row.omega for yk, fk, row in zip(y, f, rows))) / sum(
-        yk / row.omega for yk, row in zip(y, rows))
+    p_even = mixture_pressure(rho * e, phase_sums([rho] * n, [yk * rho for yk in y], y, rows))
     even = p_even > 0.0
-    return [rho] * n, [jnp.where(even, (p_even - fk) / (row.omega * rho), e) for fk, row in zip(f, rows)]
+    return [rho] * n, [jnp.where(even, (p_even - cold_pressure(rho, row)) / (row.omega * rho), e) for row in rows]
 
 
 def _add_to_cells(U, cells, mass_k, momentum, energy, volume_k, lay, volume):
@@ -705,7 +704,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     P = state.particles
     cap = P.mass.shape[0]
     gm = jnp.asarray(static.gas_material, jnp.int32)
-    rho = jnp.stack(cell_phases(prim_flat, layout.face_in, eos, n)[0], axis=1)  # (F, n)
+    rho = jnp.broadcast_to(prim_flat["rho"][layout.face_in][:, None], (layout.face_in.shape[0], n))  # (cell_phases)
     b = jnp.clip(res.buffer, 0, cap - 1)
     near = jnp.all(jnp.abs(P.x[b] - layout.face_centre[:, None, :]) <= 1.01 * h, axis=-1)  # slot not reused
     has = (res.buffer >= 0) & P.active[b] & (P.material[b] == gm[None, :]) & near
