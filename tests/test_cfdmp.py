@@ -318,16 +318,16 @@ def test_he_slab_3d_runs_and_closes_its_mass_budget():
     assert s["structures"]["max_damage"] == 1.0 and s["structures"]["mass_left_the_box"] == 0.0
 
 
-def test_every_material_takes_the_cell_density_at_one_pressure():
-    """Every material's gas takes the cell's density and a share of its internal energy that puts all at one
-    pressure p' > 0 (``coupling.cell_phases``): the particles made from a cell then fill its volume and carry its
-    internal energy exactly, whatever the composition. Cells: a products trace in air (the he-slab-2d cell
-    whose trace phase state overflowed, 1e-124 kg/m3 at a volume fraction of 1e-36), a resolved mixture, and
-    two diffused contact cells as measured in steel-plate-blast 10 and 8 us after detonation (products
-    fractions 0.372 and 0.22 at phase densities of 345 and 637 kg/m3, air at 0.58 and 0.94 kg/m3): there the
-    isobaric split gives the products a negative internal energy and the air ~1e8 J/kg, which as particles
-    set the step. In the second the cell's specific energy itself is negative: no state at the cell's
-    density gives both a positive pressure, and both take the cell's e (docstring of cell_phases)."""
+def test_cell_phases_split_where_physical_else_cell_density_at_one_pressure():
+    """What the particles of each material take from a cell (``coupling.cell_phases``). Cells: a products trace in
+    air (the he-slab-2d cell whose trace phase state overflowed, 1e-124 kg/m3 at a volume fraction of 1e-36), a
+    resolved mixture, and two diffused contact cells as measured in steel-plate-blast 10 and 8 us after
+    detonation (products fractions 0.372 and 0.22 at phase densities of 345 and 637 kg/m3, air at 0.58 and
+    0.94 kg/m3). The resolved mixture keeps the five-equation model's isobaric split: each phase its own density
+    and the cell's pressure. In the contact cells that split gives the products a negative internal energy
+    (below their principal isentrope) and the air ~1e8 J/kg; there, and in the trace cell, every material takes
+    the cell's density at one pressure p' > 0, or the cell's own specific energy where none is positive (the
+    second contact cell). In every cell the particles fill the cell's volume and carry its internal energy."""
     import jax.numpy as jnp
 
     from blastfsi import euler
@@ -345,11 +345,10 @@ def test_every_material_takes_the_cell_density_at_one_pressure():
     U = euler.conservative(rho_k, alpha, jnp.zeros((1, 4)), p, euler.Params(eos, jnp.asarray(0.5)), cfg)
     prim = cp.flat_primitives(U, eos, cfg)
     rows = euler.mixture.eos_rows(eos, 2)
-    # the isobaric split of the contact cells is not a physical state: products below zero internal energy
-    for c in (2, 3):
-        e_split = [float((p[c] - euler.mixture.cold_pressure(rho_k[k, c], rows[k])) / (rows[k].omega * rho_k[k, c]))
-                   for k in range(2)]
-        assert e_split[0] < 0.0 and e_split[1] > 5e7
+    e_split = np.asarray([[float((p[c] - euler.mixture.cold_pressure(rho_k[k, c], rows[k]))
+                                 / (rows[k].omega * rho_k[k, c])) for c in range(4)] for k in range(2)])
+    assert np.all(e_split[:, 1] > 0.0)  # the resolved mixture: a physical split
+    assert np.all(e_split[0, 2:] < 0.0) and np.all(e_split[1, 2:] > 5e7)  # the contact: not one
     assert float(prim["internal_energy"][3]) < 0.0  # the cell's own specific energy
     rho, e = cp.cell_phases(prim, jnp.arange(4), eos, 2)
     rho, e = np.asarray(jnp.stack(rho)), np.asarray(jnp.stack(e))
@@ -359,11 +358,17 @@ def test_every_material_takes_the_cell_density_at_one_pressure():
     rho_e = np.asarray(prim["rho"]) * np.asarray(prim["internal_energy"])
     np.testing.assert_allclose(np.sum(partial * e, axis=0), rho_e, rtol=1e-12)  # its internal energy, carried
     pressure = np.stack([np.asarray(jwl.pressure(jnp.asarray(rho[k]), jnp.asarray(e[k]), rows[k])) for k in range(2)])
-    np.testing.assert_allclose(rho, np.broadcast_to(np.asarray(prim["rho"]), (2, 4)), rtol=1e-14)  # the cell's
-    # cells 0-2: one positive pressure (cell 0 up to the trace's round-off); the contact's air at the cell's
+    # cell 1: the split, at the cell's own pressure
+    np.testing.assert_allclose(rho[:, 1], np.asarray(rho_k)[:, 1], rtol=1e-12)
+    np.testing.assert_allclose(e[:, 1], e_split[:, 1], rtol=1e-10)
+    np.testing.assert_allclose(pressure[:, 1], float(prim["pressure"][1]), rtol=1e-10)
+    # cells 0, 2, 3: the cell's density for every material
+    cells = [0, 2, 3]
+    np.testing.assert_allclose(rho[:, cells], np.broadcast_to(np.asarray(prim["rho"])[cells], (2, 3)), rtol=1e-14)
+    # cells 0 and 2: one positive pressure (cell 0 up to the trace's round-off); the contact's air at the cell's
     # density is not the split's ~1e8 J/kg
-    assert np.all(pressure[:, :3] > 0.0) and np.all(e[1, :3] > 0.0) and e[1, 2] < 1e7
-    np.testing.assert_allclose(pressure[0, :3], pressure[1, :3], rtol=1e-10)
+    assert np.all(pressure[:, [0, 2]] > 0.0) and np.all(e[1, [0, 2]] > 0.0) and e[1, 2] < 1e7
+    np.testing.assert_allclose(pressure[0, [0, 2]], pressure[1, [0, 2]], rtol=1e-10)
     # cell 3: no state at the cell's density gives both a positive pressure; both take the cell's e
     np.testing.assert_allclose(e[:, 3], float(prim["internal_energy"][3]), rtol=1e-14)
 
