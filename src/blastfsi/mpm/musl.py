@@ -41,6 +41,19 @@ One step of length dt (all particle loops are whole-array operations):
    frame-independent where u = g. sum_p m_p alpha_p ((S n) . v_p^n - sum_I
    N_Ip n_I . u_I) = 0, so sum_p m_p c_p = sum_p m_p h_p exactly: the blend
    conserves the energy (tests/test_mpm.py). Only when ``Config.blend``.
+   Per particle the first term has no sign where n differs from g (it holds
+   the covariance of the nodal velocity and its change over the stencil), and
+   for a rarefied particle, whose internal energy is small against alpha times
+   the squared velocity differences across its stencil, it drove the internal
+   energy below zero and the pressure negative, after which compression took
+   more energy still: air at 1.2e-4-3e-4 kg/m^3 in the near vacuum behind
+   steel-plate-blast's bridge fell from 2e5 to -5e5 J/kg within 10 us (with
+   pure FLIP it stayed positive), and the Eulerian cells read from it became
+   non-physical. So c_p takes at most the particle's internal energy,
+   c_p >= -max(e_p, 0) (both gases' e >= 0 in every physical state: an ideal
+   gas's and, on and above their detonation isentrope, the products'); the
+   energy it declines is the step's non-conservation, which a coupled run's
+   budget books.
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
    momentum; face conditions and constraints again.
 5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28)
@@ -598,7 +611,10 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         ps = ps._replace(density=relaxed[0], energy=relaxed[1])
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
     # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the gas
-    energy = ps.energy - P.q * dvol / ps.density + blend_heat
+    energy = ps.energy - P.q * dvol / ps.density
+    # the blend heat is indefinite per particle (its first term; docstring step 3): it takes at most the
+    # particle's internal energy, what it declines stays with the particle (booked as the step's change)
+    energy = energy + jnp.maximum(blend_heat, -jnp.maximum(energy, 0.0))
     if void is not None:  # void gas does no work (and takes no blend heat: alpha = 0)
         energy = jnp.where(void, ps.energy, energy)
     # the models read the increments many times: materialised, not recomputed from the gathers in each read
