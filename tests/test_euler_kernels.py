@@ -115,6 +115,25 @@ def test_stable_dt_formulas():
         assert int(first_bad_cell(U, prm, cfg)) == -1
 
 
+def test_stable_dt_counts_the_owned_cells_and_their_face_neighbours():
+    """With ``owned`` (a coupled run's cells outside the fictitious ones): a fast cell two cells from the owned
+    ones does not set the step, one that shares a face with them does (its waves enter that face's flux), and
+    a non-physical cell anywhere still gives NaN."""
+    prm = params(AIR, cfl=0.4)
+    cfg = config((6, 4), dx=0.01, scheme=1)
+    u = jnp.zeros((2, 6, 4))
+    U = conservative(jnp.full((6, 4), 1.2), None, u, jnp.full((6, 4), 1.0e5), prm, cfg)
+    owned = jnp.zeros((6, 4), bool).at[:3].set(True)  # x-columns 0-2 owned, 3-5 fictitious
+    calm = float(stable_dt(U, prm, cfg))
+    far = conservative(jnp.full((6, 4), 1.2), None, u.at[0, 4, 2].set(3000.0), jnp.full((6, 4), 1.0e5), prm, cfg)
+    near = conservative(jnp.full((6, 4), 1.2), None, u.at[0, 3, 2].set(3000.0), jnp.full((6, 4), 1.0e5), prm, cfg)
+    with_owned = jax.jit(euler.stable_dt, static_argnums=2)
+    assert float(with_owned(far, prm, cfg, owned)) == pytest.approx(calm, rel=1e-14)
+    assert float(stable_dt(far, prm, cfg)) < 0.2 * calm  # (without the mask it sets the step)
+    assert float(with_owned(near, prm, cfg, owned)) == pytest.approx(float(stable_dt(near, prm, cfg)), rel=1e-14)
+    assert np.isnan(float(with_owned(far.at[3, 5, 0].set(-1.0e6), prm, cfg, owned)))
+
+
 @pytest.mark.parametrize("row, value", [(0, -1.0), (0, np.nan), (3, -1.0e6), (3, np.inf), (1, np.inf)])
 def test_stable_dt_flags_nonphysical_cells(row, value):
     """NaN/inf, rho <= 0 or p <= 0 in one cell (rows rho, rho u, rho v, E): stable_dt is NaN and

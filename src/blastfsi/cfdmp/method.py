@@ -282,8 +282,9 @@ class Cfdmp:
         pref = params.mpm.reference_pressure
         n = cfg.n_materials
 
-        def stable_dt(s):
-            dt = ek.stable_dt(s.U, params.euler, cfg) if cs.faces else jnp.inf
+        def stable_dt(s):  # once coupled, the fictitious cells set the Eulerian step only next to the scheme's own
+            owned = ~lay.fictitious | ~s.coupled
+            dt = ek.stable_dt(s.U, params.euler, cfg, owned) if cs.faces else jnp.inf
             return jnp.minimum(dt, jnp.where(s.coupled, mpm.stable_dt(s.mpm, params.mpm, mcfg), jnp.inf))
 
         # each branch returns the new state and the viewed grid (blast maps), one gas P2G per step

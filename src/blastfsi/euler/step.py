@@ -80,8 +80,13 @@ def _bad_and_speed(U, params, cfg):
     return bad, rate
 
 
-def stable_dt(U, params: Params, cfg: Config):
+def stable_dt(U, params: Params, cfg: Config, owned=None):
     """CFL step; NaN exactly when some cell is non-physical (NaN or inf, rho <= 0, p <= 0 or c^2 <= 0).
+
+    ``owned`` ((*shape) bool, default every cell): the cells whose update is kept. The step bounds the
+    signal of these and of their face neighbours (a face's flux reads the waves of both sides); the
+    cells beyond (a coupled run's fictitious cells deeper than one cell, which the scheme only reads
+    through its reconstruction) do not set it. The fault check covers every cell.
 
     Split schemes (Lax-Wendroff, HLLC-Hancock): dt = cfl dx / max over cells and axes of (|u_d| + c);
     each directional operator then runs at Courant number <= cfl/2 (dt/2 each), so the linear limit
@@ -93,8 +98,20 @@ def stable_dt(U, params: Params, cfg: Config):
     positivity of HLLC-MUSCL near strong blasts.
     """
     bad, rate = _bad_and_speed(U, params, cfg)
+    if owned is not None:
+        rate = jnp.where(_with_face_neighbours(owned), rate, 0.0)
     dt = jnp.asarray(params.cfl, U.dtype) * cfg.dx / jnp.max(rate)
     return jnp.where(jnp.any(bad), jnp.nan, dt)
+
+
+def _with_face_neighbours(cells):
+    """``cells`` (bool, *shape) and every cell that shares a face with one of them."""
+    out = cells
+    for axis in range(cells.ndim):
+        padded = jnp.pad(cells, [(1, 1) if a == axis else (0, 0) for a in range(cells.ndim)])
+        n = cells.shape[axis]
+        out = out | jax.lax.slice_in_dim(padded, 0, n, axis=axis) | jax.lax.slice_in_dim(padded, 2, n + 2, axis=axis)
+    return out
 
 
 def first_bad_cell(U, params: Params, cfg: Config):
