@@ -398,7 +398,7 @@ def cell_phases(prim_flat: dict, cells, eos, n: int):
     internal energy stay exact; the pressure is p', not p (in a mixed cell p' < p where the dense products
     hold more of the mass than of the volume, sum_k Y_k / G_k > sum_k alpha_k / G_k). Given to every cell,
     this rule lowered the incident blast's impulse at he-slab-2d's gauge behind the bridge by 11.6 % against
-    its mirror in the Eulerian air (4.7 % with the split where it is physical). Where p' <= 0 too (the cell's
+    its mirror in the Eulerian air (4.8 % with the split where it is physical). Where p' <= 0 too (the cell's
     e < 0; 13 of 807 mixed bridge cells in the first 24 us of steel-plate-blast) no state at the cell's
     density gives every material a positive pressure, and every material takes the cell's e, which leaves
     air below zero pressure until the relaxation and the flow compress it: the split there stopped
