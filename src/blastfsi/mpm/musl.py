@@ -681,7 +681,8 @@ def mixture_signal(P: Particles, signal, config: Config):
     grid = config.grid
     idx, w, _ = materialised_stencil(P, grid, config.shape)
     mw = jnp.where(P.active, P.mass, 0.0) * w
-    nodal = particle_to_grid(idx, [mw, mw * signal ** 2], grid.num_nodes, config.combined_scatter)
+    squared = jnp.where(P.active, signal ** 2, 0.0)  # (a free slot's stale values stay out of the nodes)
+    nodal = particle_to_grid(idx, [mw, mw * squared], grid.num_nodes, config.combined_scatter)
     mean = nodal[:, 1] / jnp.where(nodal[:, 0] > 0.0, nodal[:, 0], 1.0)
     return jnp.sqrt(jnp.maximum(grid_to_particle(idx, w, mean[:, None], config.combined_scatter)[0], 0.0))
 
