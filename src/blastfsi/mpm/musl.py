@@ -401,11 +401,14 @@ def void_gas(P: Particles, config: Config, density):
     (4.5e6 J/kg, Dobratz & Crawford, LLNL Explosives Handbook, UCRL-52997, 1985), and its momentum
     and energy are as small beside the resolved gas around it. A void particle that is compressed again
     above the floor rejoins with the internal energy it kept (no work is booked while void)."""
+    gas = gas_particles(P, config)
+    return None if gas is None else gas & P.active & (density < VOID_DENSITY)
+
+
+def gas_particles(P: Particles, config: Config):
+    """(n,) bool: the particles of a fluid-model material (gases, detonation products); None without any."""
     fluids = relaxation.fluid_materials(config.models)
-    if not fluids:
-        return None
-    gas = functools.reduce(operator.or_, [P.material == k for k in fluids])
-    return gas & P.active & (density < VOID_DENSITY)
+    return functools.reduce(operator.or_, [P.material == k for k in fluids]) if fluids else None
 
 
 def uses_cell_centre_gradient(config: Config) -> bool:
@@ -464,8 +467,7 @@ def cell_centre_gradient(P: Particles, grid: Grid, config: Config, w, grad, r, v
     In r-z the hoop term's N_I / r is taken at the cell centre too (N_I(x_c) = 1/4, r_c).
     """
     d, h, shape = grid.dim, grid.cell_size, config.shape
-    fluids = relaxation.fluid_materials(config.models)
-    gas = functools.reduce(operator.or_, [P.material == k for k in fluids]) & P.active
+    gas = gas_particles(P, config) & P.active
     per_dim, cell = [], []
     for j in range(d):  # the cell's nodes within the particle's stencil: N = 1/2, dN/dx = -+1/h there, else 0
         xi = (P.x[:, j] - grid.origin[j]) / h
@@ -666,9 +668,8 @@ def stable_dt(state: State, params: Params, config: Config):
     P = state.particles
     signal = signal_speed(P.wave_speed, 0.0, P.vol_rate, config.grid.cell_size, params.q_quadratic,
                           params.q_linear)
-    fluids = relaxation.fluid_materials(config.models)
-    if fluids:
-        gas = functools.reduce(operator.or_, [P.material == k for k in fluids])
+    gas = gas_particles(P, config)
+    if gas is not None:
         signal = jnp.where(gas, mixture_signal(P, signal, config), signal)
     fastest = jnp.max(jnp.where(P.active, jnp.sqrt(row_sum(P.v * P.v)) + signal, 0.0))
     dt = params.cfl * config.grid.cell_size / fastest
