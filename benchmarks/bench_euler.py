@@ -20,6 +20,7 @@ Memory-traffic model (bytes per cell-step, b = 8 (float64) or 4 (float32), five 
   best reads and writes the five fields once: 6 x (5 + 5) x b = 480 B (float64).
 * hllc-muscl, unsplit SSP-RK2: stage 1 reads U and writes U1, stage 2 reads U and U1
   and writes U^{n+1}, each stage one pass over all three axes: (10 + 15) x b = 200 B.
+* hllc-hancock, split as lax-wendroff: 6 x (5 + 5) x b = 480 B.
 The bandwidth bound is B / (bytes per cell-step); the fraction reached is the measured
 rate over that bound. B: on a CPU the best of a STREAM-like copy and triad measured
 here (NumPy, one thread, and a jitted JAX kernel, all threads; each written byte counted
@@ -35,11 +36,16 @@ cost of the equation-of-state pass against an ideal gas written directly and a f
 XLA's cost analysis (bytes, flops, transcendentals per cell) of each.
 
 --pyclaw FILE.npz: the 2D blast of bench_pyclaw.py (cylindrical charge, 400^2 cells)
-with both schemes, timed (adaptive CFL step, cfl = --cfl) and compared in L1 density
+with every scheme, timed (adaptive CFL step, cfl = --cfl for hllc-muscl, --cfl-split for the split
+schemes, whose Courant number counts the fastest axis, not the sum over axes) and compared in L1 density
 error with PyClaw against a 1D cylindrical reference of our own (hllc-muscl,
 --ref-cells cells on r in [0, 1.5]); the file is made with /tmp/clawenv/bin/python
-(--pyclaw-python) when missing. --grids-2d adds our solves on further grids, to read off the
-grid and the wall time at which our error matches PyClaw's.
+(--pyclaw-python) when missing. --grids-2d adds our solves on further grids and --pyclaw-more PyClaw's
+(files of bench_pyclaw.py --cells N); the time to accuracy of each code is the wall time at which its error
+reaches PyClaw's on its first grid, interpolated in log-log between the two grids that bracket it:
+
+    python benchmarks/bench_euler.py --sizes --pyclaw P400.npz --pyclaw-more P300.npz P500.npz --limiter mc \
+        --cfl 0.8 --cfl-split 1.5 --grids-2d 500 600 --schemes-2d hllc-hancock hllc-muscl
 """
 from __future__ import annotations
 
@@ -47,16 +53,18 @@ import argparse
 import hashlib
 import json
 import os
-import platform
 import re
 import subprocess
 import sys
 import time
 from pathlib import Path
 
-SCHEMES = {"lax-wendroff": 0, "hllc-muscl": 1}
+from machine import described  # (benchmarks/machine.py, beside this script)
+
+SCHEMES = {"lax-wendroff": 0, "hllc-muscl": 1, "hllc-hancock": 2}  # blastfsi.euler.LAX_WENDROFF, HLLC_MUSCL, HLLC_HANCOCK
+SPLIT_SCHEMES = ("lax-wendroff", "hllc-hancock")  # dt from the fastest axis (blastfsi.euler.step.stable_dt)
 LIMITERS = {"van-leer": 0, "minmod": 1, "mc": 2}  # blastfsi.euler.VAN_LEER, MINMOD, MC
-FIELD_PASSES = {"lax-wendroff": 6 * (5 + 5), "hllc-muscl": 10 + 15}  # field reads+writes per 3D cell-step (docstring)
+FIELD_PASSES = {"lax-wendroff": 6 * (5 + 5), "hllc-muscl": 10 + 15, "hllc-hancock": 6 * (5 + 5)}  # field reads+writes per 3D cell-step (docstring)
 H100_BANDWIDTH = 3.35e12  # B/s, NVIDIA H100 SXM5 HBM3 datasheet
 BLAST = dict(p_in=10.0, p_out=1.0, rho=1.0, radius=0.2, gamma=1.4)  # nondimensional blast, same as bench_pyclaw.py
 T_END_2D, R_MAX_REF = 0.25, 1.5  # 2D comparison: end time (shock radius ~0.65 < 1), extent of the 1D reference
@@ -75,13 +83,15 @@ def _jax_setup():
     return jax, jnp, np, euler, ideal_gas_params
 
 
-def _blast_state(shape, lower, upper, scheme, geometry, bc, cfl, limiter=0):
+def _blast_state(shape, lower, upper, scheme, geometry, bc, cfl, limiter=0, characteristic=True):
     """Config, Params and U of the blast (cell-centre rule: p_in where the centre lies at r < radius);
-    limiter: euler.VAN_LEER (0), MINMOD or MC, for hllc-muscl."""
+    limiter: euler.VAN_LEER (0), MINMOD or MC, and characteristic (limiting in characteristic variables, the
+    scenario's numerics.limiting = "characteristic") for the HLLC schemes."""
     jax, jnp, np, euler, ideal_gas_params = _jax_setup()
     dtype = np.float64 if jax.config.jax_enable_x64 else np.float32
     dx = (upper - lower) / shape[0]
-    cfg = euler.Config(tuple(shape), dx, geometry, bc, scheme, 1, (lower,) * len(shape), limiter)
+    cfg = euler.Config(tuple(shape), dx, geometry, bc, scheme, 1, (lower,) * len(shape), limiter,
+                       characteristic=characteristic)
     params = euler.Params(jnp.asarray([list(ideal_gas_params(BLAST["gamma"]))], dtype), jnp.asarray(cfl, dtype))
     axes = [lower + (np.arange(m) + 0.5) * dx for m in shape]
     r = np.sqrt(sum(c ** 2 for c in np.meshgrid(*axes, indexing="ij")))
@@ -174,9 +184,9 @@ def _run_to(U, t_end, params, cfg):
     return jax.lax.while_loop(lambda c: c[1] < t_end, body, (U, jnp.zeros((), U.dtype), jnp.zeros((), jnp.int32)))
 
 
-def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats, limiter=0):
+def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats, limiter=0, characteristic=True):
     jax, jnp, np, euler, _ = _jax_setup()
-    cfg, params, U, axes = _blast_state(shape, lower, upper, scheme, geometry, bc, cfl, limiter)
+    cfg, params, U, axes = _blast_state(shape, lower, upper, scheme, geometry, bc, cfl, limiter, characteristic)
     t0 = time.perf_counter()
     compiled = jax.jit(_run_to, static_argnums=3).lower(U, jnp.asarray(t_end, U.dtype), params, cfg).compile()
     compile_s = time.perf_counter() - t0
@@ -188,9 +198,12 @@ def _solve(shape, lower, upper, scheme, geometry, bc, cfl, t_end, repeats, limit
             "compile_s": compile_s}
 
 
-def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-leer", extra_schemes=tuple(SCHEMES)):
-    """Our 2D blast (hllc-muscl with ``limiter``; both schemes on PyClaw's grid, ``extra_schemes`` on the
-    extra_grids) and PyClaw's against a 1D cylindrical reference (module docstring)."""
+def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-leer", extra_schemes=tuple(SCHEMES),
+               cfl_split=None, limiting="characteristic", pyclaw_more=()):
+    """Our 2D blast (the HLLC schemes with ``limiter``; every scheme on PyClaw's grid, ``extra_schemes`` on the
+    extra_grids; the split schemes at ``cfl_split``, default ``cfl``) and PyClaw's against a 1D cylindrical
+    reference (module docstring); ``limiting``: "characteristic" or "primitive" (numerics.limiting);
+    ``pyclaw_more``: PyClaw's solutions on further grids (files of bench_pyclaw.py)."""
     _, _, np, euler, _ = _jax_setup()
     claw = np.load(pyclaw_npz)
     n_claw = int(claw["density"].shape[0])
@@ -207,18 +220,21 @@ def compare_2d(pyclaw_npz, cfl, ref_cells, repeats, extra_grids, limiter="van-le
         for scheme, code in SCHEMES.items():
             if n != n_claw and scheme not in extra_schemes:
                 continue
-            s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, cfl, T_END_2D,
-                       repeats, LIMITERS[limiter])
+            courant = cfl_split if scheme in SPLIT_SCHEMES and cfl_split is not None else cfl
+            s = _solve((n, n), -1.0, 1.0, code, euler.CARTESIAN, ((euler.OUTFLOW,) * 2,) * 2, courant, T_END_2D,
+                       repeats, LIMITERS[limiter], limiting == "characteristic")
             xc, yc = np.meshgrid(*s["axes"], indexing="ij")
-            name = f"blastfsi {scheme}" + (f" {limiter}" if code == euler.HLLC_MUSCL else "")
-            rows.append({"code": name, "grid": n, "cfl": cfl, "steps": s["steps"], "t_end": s["t"],
+            name = f"blastfsi {scheme}" + (f" {limiter} {limiting}" if code != euler.LAX_WENDROFF else "")
+            rows.append({"code": name, "grid": n, "cfl": courant, "steps": s["steps"], "t_end": s["t"],
                          "wall_s": s["wall_s"], "walls_s": s["walls_s"], "compile_s": s["compile_s"],
                          "cell_steps_per_s": n * n * s["steps"] / s["wall_s"],
                          "l1_density": l1(s["rho"], xc, yc, ref)})
-    rows.append({"code": "pyclaw " + str(claw["solver"]), "grid": n_claw, "cfl": "0.9 desired / 1.0 max",
-                 "steps": int(claw["steps"]), "t_end": float(claw["time"]), "wall_s": float(claw["wall_s"]),
-                 "walls_s": [float(w) for w in claw["walls_s"]], "cell_steps_per_s": float(claw["cell_steps_per_s"]),
-                 "l1_density": l1(claw["density"], claw["x"], claw["y"], ref)})
+    for other in [claw] + [np.load(f) for f in pyclaw_more]:
+        rows.append({"code": "pyclaw " + str(other["solver"]), "grid": int(other["density"].shape[0]),
+                     "cfl": "0.9 desired / 1.0 max", "steps": int(other["steps"]), "t_end": float(other["time"]),
+                     "wall_s": float(other["wall_s"]), "walls_s": [float(w) for w in other["walls_s"]],
+                     "cell_steps_per_s": float(other["cell_steps_per_s"]),
+                     "l1_density": l1(other["density"], other["x"], other["y"], ref)})
     return {"grid": f"{n_claw}x{n_claw} on [-1,1]^2", "t_end": T_END_2D, "blast": BLAST,
             "reference": {"cells": ref_cells, "r_max": R_MAX_REF, "scheme": "hllc-muscl, 1D cylindrical",
                           "steps": ref["steps"], "wall_s": ref["wall_s"],
@@ -316,7 +332,8 @@ def worker(task):
         return bench_3d(task["n"], task["scheme"], task["repeats"], task["min_time"], task["max_steps"])
     if task["kind"] == "compare2d":
         return compare_2d(task["npz"], task["cfl"], task["ref_cells"], task["repeats"], task["extra_grids"],
-                          task["limiter"], task["extra_schemes"])
+                          task["limiter"], task["extra_schemes"], task.get("cfl_split"),
+                          task.get("limiting", "characteristic"), task.get("pyclaw_more", ()))
     if task["kind"] == "profile":
         return profile(task["n"])
     raise ValueError(f"unknown worker task kind {task['kind']!r}")
@@ -350,8 +367,8 @@ def bound(row, bandwidth):
 
 
 def run_info(started_hash):
-    """When, with what command and on which kernel sources a section was measured."""
-    return {"date": time.strftime("%Y-%m-%d %H:%M %Z"), "command": " ".join(["python"] + sys.argv),
+    """When, on which machine, with what command and on which kernel sources a section was measured."""
+    return {"date": time.strftime("%Y-%m-%d %H:%M %Z"), "machine": described(), "command": " ".join(["python"] + sys.argv),
             "euler_source_sha256": started_hash, "euler_source_changed_during_run": source_hash() != started_hash}
 
 
@@ -380,13 +397,36 @@ def section_pyclaw(args):
                         "--out", args.pyclaw], check=True)
     cmp = spawn({"kind": "compare2d", "npz": args.pyclaw, "cfl": args.cfl, "ref_cells": args.ref_cells,
                  "repeats": args.repeats_2d, "extra_grids": args.grids_2d, "limiter": args.limiter,
-                 "extra_schemes": args.schemes_2d})
+                 "extra_schemes": args.schemes_2d, "cfl_split": args.cfl_split, "limiting": args.limiting,
+                 "pyclaw_more": args.pyclaw_more})
     print(f"2D blast {cmp['grid']}, t = {cmp['t_end']}; reference {cmp['reference']['cells']} cells "
           f"(L1 vs half resolution {cmp['reference']['l1_vs_half_resolution_reference']:.2e})")
     for r in cmp["rows"]:
         print(f"  {r['code'][:60]:<60} {r['grid']:4d}^2 {r['steps']:5d} steps  wall {r['wall_s']:7.2f} s  "
               f"{r['cell_steps_per_s']:10.3e} cell-steps/s  L1(rho) {r['l1_density']:.4e}", flush=True)
+    target = next(r for r in cmp["rows"] if r["code"].startswith("pyclaw"))["l1_density"]
+    cmp["time_to_accuracy"] = {"l1_density": target, "wall_s": time_to_accuracy(cmp["rows"], target)}
+    print(f"time to PyClaw's L1(rho) {target:.4e} on its first grid (log-log interpolation between each code's grids):")
+    for code, wall in cmp["time_to_accuracy"]["wall_s"].items():
+        print(f"  {code[:60]:<60} {'not bracketed' if wall is None else f'{wall:7.2f} s'}")
     return {"run": run_info(started), **cmp}
+
+
+def time_to_accuracy(rows, target):
+    """Per code (rows of several grids): the wall time at which its L1 error reaches ``target``, interpolated
+    linearly in log(wall) against log(L1) between the two grids whose errors bracket it; None where none do."""
+    import math
+    out = {}
+    for code in dict.fromkeys(r["code"] for r in rows):
+        runs = sorted((r["l1_density"], r["wall_s"]) for r in rows if r["code"] == code)
+        out[code] = None
+        for (e0, w0), (e1, w1) in zip(runs, runs[1:]):
+            if e0 <= target <= e1:
+                f = 0.0 if e1 == e0 else math.log(target / e0) / math.log(e1 / e0)
+                out[code] = math.exp(math.log(w0) + f * math.log(w1 / w0))
+        if out[code] is None and any(e == target for e, _ in runs):
+            out[code] = next(w for e, w in runs if e == target)
+    return out
 
 
 def section_profile(n):
@@ -418,15 +458,21 @@ def main():
     ap.add_argument("--min-time", type=float, default=10.0, help="seconds per timed call (chooses N)")
     ap.add_argument("--max-steps", type=int, default=500)
     ap.add_argument("--pyclaw", default=None, help="PyClaw .npz of bench_pyclaw.py; runs the 2D comparison")
+    ap.add_argument("--pyclaw-more", nargs="*", default=[],
+                    help="PyClaw .npz files of bench_pyclaw.py on further grids (rows of their own)")
     ap.add_argument("--pyclaw-python", default="/tmp/clawenv/bin/python")
     ap.add_argument("--pyclaw-cells", type=int, default=400)
     ap.add_argument("--cfl", type=float, default=0.5, help="Courant number of the 2D comparison (scenario default)")
+    ap.add_argument("--limiting", choices=("characteristic", "primitive"), default="characteristic",
+                    help="slope limiting of the HLLC schemes in the 2D comparison (numerics.limiting)")
+    ap.add_argument("--cfl-split", type=float, default=None,
+                    help="Courant number of the split schemes in the 2D comparison (default --cfl; their linear limit is 2)")
     ap.add_argument("--ref-cells", type=int, default=20000)
     ap.add_argument("--limiter", choices=sorted(LIMITERS), default="van-leer",
                     help="hllc-muscl limiter of the 2D comparison")
     ap.add_argument("--grids-2d", type=int, nargs="*", default=[], help="further grids for our 2D solves")
     ap.add_argument("--schemes-2d", nargs="+", choices=sorted(SCHEMES), default=list(SCHEMES),
-                    help="schemes solved on the --grids-2d (both always run on PyClaw's grid)")
+                    help="schemes solved on the --grids-2d (all always run on PyClaw's grid)")
     ap.add_argument("--repeats-2d", type=int, default=2, help="timed runs of each 2D comparison solve")
     ap.add_argument("--profile", type=int, default=None, metavar="N", help="per-kernel profile at N^3 (float64)")
     ap.add_argument("--out", default=None)
@@ -443,11 +489,13 @@ def main():
     bandwidth = args.gpu_bandwidth if on_gpu else measured
     sizes = ([64, 128, 256] if on_gpu else [64, 128]) if args.sizes is None else args.sizes
     report = json.loads(Path(args.out).read_text()) if args.update and args.out and Path(args.out).exists() else {}
-    report.update({"machine": platform.processor() or platform.machine(), "cpu_count": os.cpu_count(),
+    report.update({"machine": described(), "cpu_count": os.cpu_count(),
                    "device": st["device"], "stream_bytes_per_s": st, "bandwidth_used_bytes_per_s": bandwidth,
                    "bandwidth_source": "nominal (--gpu-bandwidth)" if on_gpu else "measured STREAM-like best",
                    "bytes_model": {"lax-wendroff": "6 half-sweeps x (5 read + 5 write) fields x b",
-                                   "hllc-muscl": "SSP-RK2: (5+5) + (10+5) fields x b", "b": "8 float64, 4 float32"}})
+                                   "hllc-muscl": "SSP-RK2: (5+5) + (10+5) fields x b",
+                                   "hllc-hancock": "6 half-sweeps x (5 read + 5 write) fields x b",
+                                   "b": "8 float64, 4 float32"}})
     if sizes:
         report["throughput_3d"] = section_3d(args, sizes, bandwidth)
     if args.pyclaw:
