@@ -80,11 +80,12 @@ def predictor(w, slope, c2, lam, geo, lay, axis):
 def hancock_flux(z, nw, lam, geo, eos_r, cfg: Config, lay, axis):
     """(flux rows and face velocity at the faces 0..n, mid-step pressure and products fraction of cells
     0..n-1 (None with one material)) of one axis; z: rows [primitive rows (nw), rho e, c^2] with NG
-    ghost cells on that axis."""
+    ghost cells on that axis. The slopes and the predictor are materialised once: fused, XLA:CPU evaluates
+    them (the characteristic limiting included) inside every consumer, both face states of every cell
+    (measured 2D 400^2: 322 -> 223 ns per cell-step)."""
     n = z[0].shape[axis] - 2 * NG
-    slopes = hllc.cell_slopes(z, nw, cfg, lay, axis)  # cells -1..n
     cells = tuple(shift(x, axis, 1, n + 2) for x in z)
-    delta = predictor(cells[:nw], slopes, cells[nw + 1], lam, geo, lay, axis)
+    slopes, delta = materialise(lambda zc: _slopes_and_delta(*zc, nw, lam, geo, cfg, lay, axis), (z, cells))
     w_left = [shift(x + 0.5 * s + d, axis, 0, n + 1) for x, s, d in zip(cells, slopes, delta)]  # w^R of cell f-1
     w_right = [shift(x - 0.5 * s + d, axis, 1, n + 1) for x, s, d in zip(cells, slopes, delta)]  # w^L of cell f
     flux, u_face = hllc.face_flux(w_left, w_right, z, nw, eos_r, lay, axis)
@@ -92,6 +93,13 @@ def hancock_flux(z, nw, lam, geo, eos_r, cfg: Config, lay, axis):
     def mid_step(r):  # primitive row r of cells 0..n-1 at the mid-step state w + delta
         return shift(cells[r] + delta[r], axis, 1, n)
     return flux, u_face, mid_step(lay.n + lay.ndim), mid_step(nw - 1) if lay.n == 2 else None
+
+
+def _slopes_and_delta(z, cells, nw, lam, geo, cfg: Config, lay, axis):
+    """(limited slopes, predictor delta) of cells -1..n (module docstring, steps 1-2); cells: z's rows of
+    those cells."""
+    slopes = hllc.cell_slopes(z, nw, cfg, lay, axis)  # cells -1..n
+    return slopes, predictor(cells[:nw], slopes, cells[nw + 1], lam, geo, lay, axis)
 
 
 def sweep(rows, tau, eos_r, cfg: Config, lay, axis: int, record: bool = False):
