@@ -215,14 +215,24 @@ BAD = [
     ("boundaries.x", {"boundaries": {"x": ["outflow", "sticky"]}}),
     ("boundaries.y", {"boundaries": {"y": ["periodic", "outflow"]}}),
     ("numerics.scheme", {"numerics": {"scheme": "weno"}}),
-    ("numerics: cfl: hllc-muscl (unsplit) is stable for 0 < cfl <= 1", {"numerics": {"cfl": 1.2}}),
-    ("numerics.cfl", {"numerics": {"scheme": "hllc-hancock", "cfl": 1.6}}),
+    ("numerics: cfl: hllc-muscl is stable for 0 < cfl <= 1, got 1.2", {"numerics": {"cfl": 1.2}}),
+    ("numerics: cfl: lax-wendroff is stable for 0 < cfl <= 1.5, got 1.6", {"numerics": {"scheme": "lax-wendroff",
+                                                                                      "cfl": 1.6}}),
+    ("numerics.cfl: Input should be less than or equal to 1.8", {"numerics": {"scheme": "hllc-hancock", "cfl": 1.81}}),
     ("domain", {"domain": {"lower": [-1.0, -1.0], "upper": [1.0, 1.05]}}),
     ("grid.cells", {"grid.cells": 20.5}),
     ("boundaries.x", {"domain.geometry": "axisymmetric", "domain.lower": [0.0, -1.0]}),
     ("domain.upper", {"domain": {"lower": [-1.0, -1.0], "upper": [1.0]}}),
     ("output.plot_plane_z: applies to 3D domains only", {"output.plot_plane_z": 0.0}),
 ]
+
+
+def test_each_scheme_takes_courant_numbers_up_to_its_own_limit():
+    from blastfsi.euler.scenario import CFL_MAX
+
+    assert CFL_MAX == {"hllc-muscl": 1.0, "lax-wendroff": 1.5, "hllc-hancock": 1.8}
+    for scheme, cap in CFL_MAX.items():
+        assert parse(_sedov2d(numerics={"scheme": scheme, "cfl": cap})).numerics.cfl == cap
 
 
 @pytest.mark.parametrize("key, over", BAD, ids=[b[0] + str(i) for i, b in enumerate(BAD)])

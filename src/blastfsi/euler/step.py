@@ -94,7 +94,8 @@ def stable_dt(U, params: Params, cfg: Config, owned=None):
     cfl = 1. Measured (Sod 200 cells; 2D blasts of pressure ratio 10 and 1e5, 48^2 walls, 200 steps):
     LW runs up to cfl 1.8 in 1D and 1.5 in 2D (NaN at 1.95 / 1.8); HLLC-MUSCL up to 1.0 (1.1 in
     1D); HLLC-Hancock up to 2.2 in both (a non-physical cell in 2D at 2.4), and the sedov-2d example
-    (ambient pressure 1e-6 of the blast's) at the schema's cap 1.0. cfl <= 0.5 keeps margin for the
+    (ambient pressure 1e-6 of the blast's) at 1.8 and 2.0; HLLC-MUSCL the sedov-2d example at its cap
+    1.0. The scenario's caps per scheme: blastfsi.euler.scenario.CFL_MAX. cfl <= 0.5 keeps margin for the
     positivity of HLLC-MUSCL near strong blasts.
     """
     bad, rate = _bad_and_speed(U, params, cfg)
