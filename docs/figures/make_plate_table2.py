@@ -6,9 +6,15 @@ the test rig's clamp:
 * ``sliding``: the rim held only along the plate's normal (``supports.hold = ["y"]``): the two thick clamping
   plates hold its faces and it pulls in without friction;
 * ``sliding-wide``: as ``sliding`` with the rim widened from 0.12 to 0.2 of the free radius (the plate to the
-  edge of the MPM box): how much the rim's hoop compression, which resists the pull-in, matters.
+  edge of the MPM box): how much the rim's hoop compression, which resists the pull-in, matters;
+* ``fixed-recess``: as ``fixed``, with the rig's front clamping plate in front of the rim: a steel ring over
+  r >= D/2 (to the edge of the MPM box), ``--recess`` deep, held at rest except its innermost column of cells,
+  so the plate lies at the bottom of a recess whose wall reflects the radial flow along the plate (the flow's
+  confinement by the rig). The MPM box's lower face moves so that BRIDGE_ROOM cells of gas lie in front of the
+  ring (``--box-lower`` moves it for any clamp, for a baseline with the same box).
 
     python docs/figures/make_plate_table2.py run DIR [--cases 1 4] [--clamps fixed sliding] [--cells N] [--end T]
+        [--recess DEPTH] [--box-lower Z]
     python docs/figures/make_plate_table2.py figures DIR    # plate_table2.json, plate_table2.png here; table
 
 Each run is its own process (``one``) and writes ``DIR/case<k>-<clamp>[-c<cells>].json``: the centre's
@@ -31,7 +37,8 @@ HERE = Path(__file__).parent
 JSON = HERE / "plate_table2.json"
 PNG = HERE / "plate_table2.png"
 
-CLAMPS = ("fixed", "sliding", "sliding-wide")
+CLAMPS = ("fixed", "sliding", "sliding-wide", "fixed-recess")
+BRIDGE_ROOM = 10  # cells of gas between the MPM box's lower face and the recess ring (the bridge needs 9: w + 4)
 EXAMPLES = {"1": "steel-plate-blast", **{k: f"steel-plate-blast-case{k}" for k in "23456"}}
 THICKNESS = {"1": 0.01, "2": 0.02, "3": 0.04, "4": 0.01, "5": 0.02, "6": 0.04}  # t [m], Table 1
 # Table 2, delta / t: experiment (Neuberger et al. 2007), the paper's CFDMP, LS-DYNA (None: not given)
@@ -39,10 +46,20 @@ TABLE2 = {"1": (2.60, 2.69, 2.59), "2": (2.70, 2.71, 2.62), "3": (None, 2.68, No
           "4": (4.85, 5.2, 4.98), "5": (5.35, 5.45, 5.24), "6": (None, 5.625, None)}
 
 
-def scenario(case: str, clamp: str, cells: int | None, end: float | None = None) -> dict:
+def scenario(case: str, clamp: str, cells: int | None, end: float | None = None, recess: float = 0.025,
+             box_lower: float | None = None) -> dict:
     from blastfsi.api import example_data
 
     data = example_data(EXAMPLES[case])
+    if box_lower is not None:
+        data["mpm_region"]["lower"][1] = box_lower
+    if clamp == "fixed-recess":
+        plate = data["structures"][0]
+        front, rim, edge = plate["lower"][1], plate["supports"][0]["lower"][0], data["mpm_region"]["upper"][0]
+        dx = (data["domain"]["upper"][0] - data["domain"]["lower"][0]) / (cells or data["grid"]["cells"])
+        data["mpm_region"]["lower"][1] = min(data["mpm_region"]["lower"][1], front - recess - BRIDGE_ROOM * dx)
+        data["structures"].append({"lower": [rim, front - recess], "upper": [edge, front], "material": plate["material"],
+                                   "supports": [{"lower": [rim + dx, front - recess], "upper": [edge, front]}]})
     if clamp.startswith("sliding"):
         for s in data["structures"]:
             s["supports"] = [{**sup, "hold": ["y"]} for sup in s.get("supports", [])]
@@ -62,38 +79,55 @@ def scenario(case: str, clamp: str, cells: int | None, end: float | None = None)
     return data
 
 
-def name(case: str, clamp: str, cells: int | None, end: float | None = None) -> str:
-    return (f"case{case}-{clamp}" + ("" if cells is None else f"-c{cells}")
-            + ("" if end is None else f"-e{round(end * 1e6)}us"))
+def name(case: str, clamp: str, cells: int | None, end: float | None = None, recess: float = 0.025,
+         box_lower: float | None = None) -> str:
+    return (f"case{case}-{clamp}" + (f"{round(recess * 1e3)}mm" if clamp == "fixed-recess" else "")
+            + ("" if cells is None else f"-c{cells}") + ("" if end is None else f"-e{round(end * 1e6)}us")
+            + ("" if box_lower is None else f"-box{round(box_lower * 1e3)}mm"))
 
 
-def cmd_one(case: str, clamp: str, cells: int | None, folder: Path, end: float | None = None) -> None:
+def cmd_one(case: str, clamp: str, cells: int | None, folder: Path, end: float | None = None, recess: float = 0.025,
+            box_lower: float | None = None) -> None:
+    """One run, written into DIR/<name>-run (so that a run stopped by a fault keeps its history: the JSON then
+    holds the history to the fault and the reason, ``stopped``), summarised in DIR/<name>.json."""
     import blastfsi
+    from blastfsi.io.results import read_history
+    from blastfsi.simulation import SimulationError
 
-    res = blastfsi.run(scenario(case, clamp, cells, end))
-    s, h = res.summary, res.history
+    label = name(case, clamp, cells, end, recess, box_lower)
+    out_dir = folder / f"{label}-run"
+    stopped = None
+    try:
+        s = blastfsi.run(scenario(case, clamp, cells, end, recess, box_lower), out=out_dir, overwrite=True).summary
+    except SimulationError as err:
+        stopped, s = str(err), None
+    h = read_history(out_dir / "history.csv")
     t = np.asarray(h["time"])
     w = np.asarray(h["tracer0_displacement_y"])
     k = int(np.argmax(w))
     out = {"case": case, "clamp": clamp, "cells": cells, "thickness": THICKNESS[case],
+           "recess": recess if clamp == "fixed-recess" else None, "box_lower": box_lower,
            "peak": float(w[k]), "peak_time": float(t[k]), "last": float(w[-1]), "end_time": float(t[-1]),
-           "steps": s["steps"], "loop_s": round(float(s["loop_time"]), 1),
-           "mass_residual": s["budget"]["mass_residual_relative"],
-           "energy_residual": s["budget"]["energy_residual_relative"],
-           "time": t.tolist(), "deflection": w.tolist()}
-    (folder / f"{name(case, clamp, cells, end)}.json").write_text(json.dumps(out) + "\n")
-    print(f"{name(case, clamp, cells, end)}: delta/t = {out['peak'] / THICKNESS[case]:.3f} at {out['peak_time'] * 1e3:.3f} ms"
-          f" (last {out['last'] / THICKNESS[case]:.3f}), {out['steps']} steps, loop {out['loop_s']} s")
+           "steps": None if s is None else s["steps"], "loop_s": None if s is None else round(float(s["loop_time"]), 1),
+           "mass_residual": None if s is None else s["budget"]["mass_residual_relative"],
+           "energy_residual": None if s is None else s["budget"]["energy_residual_relative"],
+           "stopped": stopped, "time": t.tolist(), "deflection": w.tolist()}
+    (folder / f"{label}.json").write_text(json.dumps(out) + "\n")
+    print(f"{label}: delta/t = {out['peak'] / THICKNESS[case]:.3f} at {out['peak_time'] * 1e3:.3f} ms"
+          f" (last {out['last'] / THICKNESS[case]:.3f} at {out['end_time'] * 1e3:.3f} ms), "
+          + (f"{out['steps']} steps, loop {out['loop_s']} s" if stopped is None else f"stopped: {stopped[:200]}"))
 
 
-def cmd_run(folder: Path, cases, clamps, cells, end: float | None = None) -> None:
+def cmd_run(folder: Path, cases, clamps, cells, end: float | None = None, recess: float = 0.025,
+            box_lower: float | None = None) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for case in cases:
         for clamp in clamps:
-            if (folder / f"{name(case, clamp, cells, end)}.json").is_file():
+            if (folder / f"{name(case, clamp, cells, end, recess, box_lower)}.json").is_file():
                 continue
-            args = [sys.executable, __file__, "one", case, clamp, str(folder)]
+            args = [sys.executable, __file__, "one", case, clamp, str(folder), "--recess", repr(recess)]
             args += ([] if cells is None else ["--cells", str(cells)]) + ([] if end is None else ["--end", repr(end)])
+            args += [] if box_lower is None else ["--box-lower", repr(box_lower)]
             subprocess.run(args, check=True)
 
 
@@ -106,10 +140,18 @@ def cmd_figures(folder: Path) -> None:
         exp, paper, dyna = TABLE2[r["case"]]
         ratio = r["peak"] / r["thickness"]
         rel = "–" if exp is None else f"{100 * (ratio / exp - 1):+.1f} %"
+        if r.get("stopped"):  # the peak so far of a run stopped by a fault
+            rel = f"run stopped at {r['end_time'] * 1e3:.2f} ms by a fault"
         fmt = lambda v: "–" if v is None else f"{v:g}"  # noqa: E731
-        print(f"| {r['case']} | {fmt(exp)} | {fmt(paper)} | {fmt(dyna)} | {r['clamp']} | {r['cells'] or 'shipped'} "
+        print(f"| {r['case']} | {fmt(exp)} | {fmt(paper)} | {fmt(dyna)} | {_clamp_label(r)} | {r['cells'] or 'shipped'} "
               f"| {ratio:.3f} ({r['peak_time'] * 1e3:.2f} ms) | {rel} | {r['last'] / r['thickness']:.3f} |")
     _figure(runs)
+
+
+def _clamp_label(run: dict) -> str:
+    """The clamp of a run, with the recess depth and a moved MPM box where they are set."""
+    return (run["clamp"] + (f" ({run['recess'] * 1e3:.0f} mm)" if run.get("recess") else "")
+            + (f", box from z = {run['box_lower'] * 1e3:.0f} mm" if run.get("box_lower") is not None else ""))
 
 
 def _figure(runs) -> None:
@@ -121,11 +163,12 @@ def _figure(runs) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     colours = {}
     for r in sorted(runs, key=lambda r: (r["case"], r["clamp"], r["cells"] or 0)):
-        if r["cells"] is not None:
+        if r["cells"] is not None or r.get("box_lower") is not None or r.get("stopped"):
             continue
         c = colours.setdefault(r["case"], f"C{len(colours)}")
         ax.plot(np.asarray(r["time"]) * 1e3, np.asarray(r["deflection"]) / r["thickness"], color=c,
-                ls="-" if r["clamp"] == "sliding" else "--", label=f"case {r['case']}, {r['clamp']} clamp")
+                ls={"sliding": "-", "fixed-recess": "-."}.get(r["clamp"], "--"),
+                label=f"case {r['case']}, {_clamp_label(r)} clamp")
         exp = TABLE2[r["case"]][0]
         if exp is not None:
             ax.axhline(exp, color=c, lw=0.8, ls=":")
@@ -147,19 +190,23 @@ def main(argv=None) -> int:
     one.add_argument("dir", type=Path)
     one.add_argument("--cells", type=int)
     one.add_argument("--end", type=float)
+    one.add_argument("--recess", type=float, default=0.025)
+    one.add_argument("--box-lower", type=float)
     run = sub.add_parser("run")
     run.add_argument("dir", type=Path)
     run.add_argument("--cases", nargs="+", default=["1", "4"], choices=sorted(EXAMPLES))
     run.add_argument("--clamps", nargs="+", default=["fixed", "sliding"], choices=CLAMPS)
     run.add_argument("--cells", type=int)
     run.add_argument("--end", type=float, help="time.end [s] (default: the example's; the sliding clamp peaks later)")
+    run.add_argument("--recess", type=float, default=0.025, help="depth of the front clamping plate of fixed-recess [m]")
+    run.add_argument("--box-lower", type=float, help="the MPM box's lower face z [m] (default: the example's)")
     fig = sub.add_parser("figures")
     fig.add_argument("dir", type=Path)
     a = p.parse_args(argv)
     if a.cmd == "one":
-        cmd_one(a.case, a.clamp, a.cells, a.dir, a.end)
+        cmd_one(a.case, a.clamp, a.cells, a.dir, a.end, a.recess, a.box_lower)
     elif a.cmd == "run":
-        cmd_run(a.dir, a.cases, a.clamps, a.cells, a.end)
+        cmd_run(a.dir, a.cases, a.clamps, a.cells, a.end, a.recess, a.box_lower)
     else:
         cmd_figures(a.dir)
     return 0
