@@ -24,6 +24,8 @@ CASES = {  # name -> (example, overrides)
     "sedov-2d lax-wendroff": ("sedov-2d", {"numerics.scheme": "lax-wendroff"}),
     "sedov-2d hllc-muscl": ("sedov-2d", {"numerics.scheme": "hllc-muscl"}),
     "sedov-2d hllc-hancock": ("sedov-2d", {"numerics.scheme": "hllc-hancock"}),
+    "sedov-2d lax-wendroff at its largest cfl": ("sedov-2d", {"numerics.scheme": "lax-wendroff", "numerics.cfl": 1.5}),
+    "sedov-2d hllc-hancock at its largest cfl": ("sedov-2d", {"numerics.scheme": "hllc-hancock", "numerics.cfl": 1.8}),
     "plate1d-uniform": ("plate1d-uniform", {}),
     "taylor-bar": ("taylor-bar", {}),
 }
