@@ -69,6 +69,7 @@ def _restored(folder: Path, name: str, time: float | None):
     import jax.numpy as jnp
 
     from blastfsi import api, method as methods, simulation
+    from blastfsi.io import results
 
     jax.config.update("jax_enable_x64", True)
     from blastfsi.scenario import expand
@@ -85,12 +86,10 @@ def _restored(folder: Path, name: str, time: float | None):
         _, ckpt_times, _ = simulation.stop_times(sc)
         k = max(i for i, t in enumerate(ckpt_times) if t <= time)
 
-        def fit(saved, fresh):  # the checkpoint's pool may have grown
-            nonlocal setup
-            (setup,), fresh = simulation.fit_pool(method, [setup], saved, fresh)
-            return fresh
-
-        state = simulation._restore(folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5", state, fit)
+        file = folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5"
+        saved, _ = results.read_checkpoint(file)
+        (setup,), state = simulation.fit_pool(method, [setup], saved, state)  # the pool may have grown
+        state = simulation._restore(file, saved, state)
         static = method.static(setup, scs[0])
     scalars = (20_000, sc.time.end / (n - 1), sc.time.dt_min_fraction)
     advance, _ = methods.compiled_advance(method, static, state, params, sc.time.end, *scalars)
@@ -112,6 +111,9 @@ def field_at(folder: Path, name: str, time: float, out: Path) -> None:
                                                   "continued_from": t0}))
 
 
+FAR = 1.0  # s, a stop time far beyond the runs (finite: the time loop spreads the steps before a stop over it)
+
+
 def step_cost(folder: Path, name: str, time: float | None, steps: int = 20) -> dict:
     """Wall and CPU seconds per step of run ``name`` at its checkpoint before ``time`` (or its start),
     compiled once, best of three calls of ``steps`` steps (measure on an otherwise idle machine)."""
@@ -120,11 +122,11 @@ def step_cost(folder: Path, name: str, time: float | None, steps: int = 20) -> d
     import jax
 
     method, setup, advance, state, params, (_, interval, floor) = _restored(folder, name, time)
-    state = jax.block_until_ready(advance(state, params, float("inf"), 2, interval, floor))
+    state = jax.block_until_ready(advance(state, params, FAR, 2, interval, floor))
     best = None
     for _ in range(3):
         w, c = clock.perf_counter(), clock.process_time()
-        state = jax.block_until_ready(advance(state, params, float("inf"), steps, interval, floor))
+        state = jax.block_until_ready(advance(state, params, FAR, steps, interval, floor))
         w, c = (clock.perf_counter() - w) / steps, (clock.process_time() - c) / steps
         best = (w, c) if best is None or w < best[0] else best
     return {"run": name, "at": float(state.t[0]), "particles": int(state.mpm.particles.active.sum()),
