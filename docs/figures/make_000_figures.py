@@ -82,16 +82,16 @@ def _restored(folder: Path, name: str, time: float | None):
     n = sc.output.history_samples
     state = simulation._stack([method.initial_state(setup, scs[0], n, jnp.float64)], "state")
     params = simulation._stack([method.params(setup, jnp.float64)], "params")
+    begin = float(state.t[0])  # the clock's start, as the driver's: a charge's remap time
     if time is not None:
-        _, ckpt_times, _ = simulation.stop_times(sc)
+        _, ckpt_times, _ = simulation.stop_times(sc, begin)
         k = max(i for i, t in enumerate(ckpt_times) if t <= time)
-
         file = folder / name / "checkpoints" / f"ckpt_{k + 1:04d}.h5"
         saved, _ = results.read_checkpoint(file)
         (setup,), state = simulation.fit_pool(method, [setup], saved, state)  # the pool may have grown
         state = simulation._restore(file, saved, state)
         static = method.static(setup, scs[0])
-    scalars = (20_000, sc.time.end / (n - 1), sc.time.dt_min_fraction)
+    scalars = (20_000, (sc.time.end - begin) / (n - 1), sc.time.dt_min_fraction)
     advance, _ = methods.compiled_advance(method, static, state, params, sc.time.end, *scalars)
     return method, setup, advance, state, params, scalars
 
