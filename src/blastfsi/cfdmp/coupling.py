@@ -135,6 +135,7 @@ class Static(NamedTuple):
     n_structure: int  # structure particles (first slots of the pool)
     ppc: int  # gas particles per cell and direction
     outflow_faces: tuple  # (axis, side) per box face on an outflow face of the domain (outflow_ghost, remove_leaving)
+    pool_parts: int = 1  # devices the particle pool is split over (mpm.add_particles_at)
 
 
 class Reservoirs(NamedTuple):
@@ -759,7 +760,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
                           wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros(zero.shape + (3,), bool),
                           prescribed_velocity=jnp.zeros_like(flat(x)), surface_load=jnp.zeros_like(flat(x)))
     batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
-    pool, required, slots = mpm.add_particles_at(P, batch, static.n_structure)
+    pool, required, slots = mpm.add_particles_at(P, batch, static.n_structure, static.pool_parts)
     fits = required <= cap
     # grow the existing inflow particles in place
     grow = flat(fed & has) & fits
@@ -813,5 +814,5 @@ def activate(U, state: mpm.State, prim_flat, eos, params: mpm.Params, static: St
                           vol_rate=zero, wave_speed=zero, plastic_work=zero, prescribed=jnp.zeros((n * G, 3), bool),
                           prescribed_velocity=jnp.zeros_like(half), surface_load=jnp.zeros_like(half))
     batch = batch._replace(wave_speed=wave_speed(batch.point, batch.material, params, static.mpm))
-    pool, required = mpm.add_particles(state.particles, batch, static.n_structure)
+    pool, required = mpm.add_particles(state.particles, batch, static.n_structure, static.pool_parts)
     return state._replace(particles=pool), required

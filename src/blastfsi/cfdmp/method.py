@@ -26,10 +26,10 @@ from blastfsi.cfdmp import coupling as cp
 from blastfsi.cfdmp.scenario import CfdmpScenario
 from blastfsi.diagnostics import blast_maps, damage
 from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
-from blastfsi.scenario import AXES
+from blastfsi.scenario import AXES, device_count
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
-from blastfsi.mpm.method import VOIGT_TO_TENSOR, tracer_columns, tracer_row, tracer_summary
+from blastfsi.mpm.method import VOIGT_TO_TENSOR, placed, tracer_columns, tracer_row, tracer_summary
 from blastfsi.cfdmp import problem
 from blastfsi.euler import problem as euler_problem
 
@@ -76,6 +76,7 @@ class Static(NamedTuple):
     #                   inflow particle per face cell and material), so no emission is ever refused; 0 for a
     #                   fixed pool, full when an emission did not fit
     tracers: tuple  # structure particle of each output.tracers point
+    devices: int = 1  # numerics.devices: the particle pool is split over them (blastfsi.mpm.method.placed)
 
 
 def _maps(s: State) -> blast_maps.BlastMaps:
@@ -146,7 +147,7 @@ class Cfdmp:
     pool_leaf = "mpm.particles.active"  # a blastfsi.method.GrowingPool: the driver grows a full pool
 
     def build(self, sc: CfdmpScenario) -> problem.Setup:
-        return problem.build(sc)
+        return problem.build(sc, device_count(sc.numerics.devices))
 
     def static(self, setup: problem.Setup, sc: CfdmpScenario) -> Static:
         return self._static(setup, SCHEME_CODE[sc.numerics.scheme], LIMITER_CODE[sc.numerics.limiter],
@@ -161,9 +162,11 @@ class Cfdmp:
                         characteristic=characteristic)
         c = setup.coupling
         n_struct = c.structure_particles
-        # the structures fill the first slots of the pool and are never deleted; the gas lives after them
-        slots = tuple((n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct)
-                      for k in range(len(setup.models)))
+        # the structures fill the first slots of the pool and are never deleted; the gas lives after them. A pool
+        # split over devices runs every model on every slot instead: a slice of the split pool at n_struct would
+        # move the particles between devices each step
+        slots = None if setup.devices > 1 else tuple(
+            (n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct) for k in range(len(setup.models)))
         mcfg = mpm.make_config(setup.grid, setup.models, shape=c.shape_functions, model_slots=slots,
                                prescribed=c.clamped,
                                blend=any(a > 0.0 for a in c.pic_fraction),
@@ -173,9 +176,9 @@ class Cfdmp:
         offset = tuple(int(round((o - lo) / e.grid.dx)) for o, lo in zip(setup.grid.origin, e.grid.lower))
         coupling = cp.Static(cfg, mcfg, faces, sizes, tuple(setup.box_lo), tuple(setup.box_hi), offset,
                              tuple(setup.gas_material), n_struct, c.gas_particles_per_cell,
-                             outflow_faces(setup))
+                             outflow_faces(setup), setup.devices)
         flat = tuple(int(np.ravel_multi_index(c, e.grid.shape)) for c in e.gauge_cells)
-        return Static(coupling, flat, setup.capacity, c.pool_margin, c.tracers)
+        return Static(coupling, flat, setup.capacity, c.pool_margin, c.tracers, setup.devices)
 
     def params(self, setup: problem.Setup, dtype) -> Params:
         e = setup.euler
@@ -330,6 +333,7 @@ class Cfdmp:
         def step(s, dt):
             new, viewed = jax.lax.cond(s.coupled, coupled if cs.faces else mpm_only, euler_only, s, dt)
             dp = self._pressure(viewed, params, cs) - params.reference_pressure
+            new = placed(new, static.devices)
             return new._replace(**blast_maps.update(_maps(new), dp, s.t, dt, params.arrival_threshold)._asdict())
 
         def pool_full(s):  # (Static.pool_margin)
@@ -339,8 +343,9 @@ class Cfdmp:
         def history_row(s):
             return history(static, s, params).values(s.t.dtype)
 
-        return timeloop.run_until(state, t_stop, max_steps, sample_interval, dt_floor_fraction,
-                                  stable_dt=stable_dt, step=step, history_row=history_row, pool_full=pool_full)
+        return timeloop.run_until(placed(state, static.devices), t_stop, max_steps, sample_interval,
+                                  dt_floor_fraction, stable_dt=stable_dt, step=step, history_row=history_row,
+                                  pool_full=pool_full)
 
     @staticmethod
     def _view(s: State, cs: cp.Static, lay: cp.Layout):
@@ -407,6 +412,7 @@ class Cfdmp:
         in use keep their indices); None when ``numerics.capacity`` fixed the pool."""
         if not setup.coupling.capacity_grows:
             return None
+        capacity = -(-capacity // setup.devices) * setup.devices  # (equal parts per device)
         P = state.mpm.particles
         pad = mpm.empty(capacity - setup.capacity, P.point.history.shape[1], P.mass.dtype)
         grown = jax.tree_util.tree_map(lambda a, b: np.concatenate([np.asarray(a), np.asarray(b)]), P, pad)

@@ -90,6 +90,7 @@ class Setup:
     structures: mpm.Particles  # active structure particles (host batch), may be empty
     body: np.ndarray  # body index of each structure particle
     capacity: int
+    devices: int  # numerics.devices: the pool is split over them in equal parts (capacity a multiple of it)
     box_lo: tuple
     box_hi: tuple
     faces: tuple  # Face per coupled face
@@ -143,7 +144,9 @@ def _gas_part(sc: CfdmpScenario) -> euler_problem.GasPart:
         sc.numerics.euler_cfl or sc.numerics.cfl)  # (euler_cfl > 0 when set)
 
 
-def build(sc: CfdmpScenario) -> Setup:
+def build(sc: CfdmpScenario, devices: int = 1) -> Setup:
+    """The set-up of ``sc``; ``devices``: the particle pool is split over that many devices in equal parts, so
+    its capacity is rounded up to a multiple of it."""
     gas = _gas_part(sc)
     g = euler_problem.grid_geometry(gas)  # (the grid's layout first: the structures are checked before a
     #                                       charge's 1D detonation runs)
@@ -290,6 +293,7 @@ def build(sc: CfdmpScenario) -> Setup:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
                             f"of the MPM box ({at_start}) need {n_struct + at_start} particles; set "
                             f"numerics.capacity >= {n_struct + at_start} (the bridge creates more as gas flows in)")
+    capacity = -(-capacity // devices) * devices
 
     # ring cells: MPM-grid cells outside the box
     ring = np.ones(shape, bool)
@@ -362,7 +366,7 @@ def build(sc: CfdmpScenario) -> Setup:
                                                     for f in faces))
     return Setup(euler=esetup, grid=grid, materials=tuple(names), models=tuple(models), model_params=tuple(params),
                  gas_material=tuple(gas_material), structures=structures, body=body, capacity=int(capacity),
-                 box_lo=lo, box_hi=hi, faces=tuple(faces), fictitious=core, parked=core & clear, outside=~in_box,
-                 ring_cells=ring_cells, ring_x=ring_x, ring_volume=ring_volume, ring_half=ring_half,
+                 devices=devices, box_lo=lo, box_hi=hi, faces=tuple(faces), fictitious=core, parked=core & clear,
+                 outside=~in_box, ring_cells=ring_cells, ring_x=ring_x, ring_volume=ring_volume, ring_half=ring_half,
                  cell_volume=cell_volume, gas_x=gx, gas_volume=gvol, gas_half=ghalf, gas_cell=gcell,
                  boundary_measure=tuple(boundary_measure), outflow_area=outflow_area, coupling=coupling)

@@ -18,7 +18,7 @@ from blastfsi.euler.scenario import (Boundaries, Domain, EulerOutput, Grid, Init
                                      gas_materials, grid_demand)
 from blastfsi.mpm.scenario import (Body, MPMNumerics, Tracers, body_materials, body_particles, check_bodies,
                                    lattice_count, particle_demand)
-from blastfsi.scenario import AXES, Coordinate, Demand, ScenarioBase, Strict, check_box
+from blastfsi.scenario import AXES, Coordinate, Demand, Devices, ScenarioBase, Strict, check_box
 
 # Eulerian cells beyond the bridge whose values the scheme's two stages (or two sweeps) of two-cell stencils
 # read when updating the bridge: the fictitious cells of 000 Eqs. (31)-(36). Structures stay beyond them.
@@ -78,6 +78,13 @@ class CfdmpNumerics(MPMNumerics):
         "the box's gas particles and one step's emissions. The bridge fills the box as the blast compresses its "
         "gas (by about 1.2-1.3 x in the shipped slab examples); a full pool is enlarged and "
         "the time loop compiled again (summary pool_growths), and every step costs in proportion to the pool"))
+    devices: Devices = Field(1, description=(
+        "devices (GPUs of this machine; an integer >= 1) the MPM region's particle pool is spread over in equal "
+        "parts, stepped together as one program: each device maps its particles to the MPM grid, the nodal sums "
+        "and the gas's sums per Eulerian cell are added across devices, every device updates the (whole) "
+        "Eulerian and MPM grids and moves its own particles; the pool is rounded up to a multiple of it. 'all': "
+        "every device JAX sees. Results agree with one device's to round-off (the sums are added in another "
+        "order)"))
 
 
 class CfdmpOutput(EulerOutput, Tracers):

@@ -202,13 +202,13 @@ def _select(mask, a, b):
     return jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b)
 
 
-def add_particles(pool: Particles, batch: Particles, first_slot: int = 0):
+def add_particles(pool: Particles, batch: Particles, first_slot: int = 0, parts: int = 1):
     """:func:`add_particles_at` without the slots."""
-    pool, required, _ = add_particles_at(pool, batch, first_slot)
+    pool, required, _ = add_particles_at(pool, batch, first_slot, parts)
     return pool, required
 
 
-def add_particles_at(pool: Particles, batch: Particles, first_slot: int = 0):
+def add_particles_at(pool: Particles, batch: Particles, first_slot: int = 0, parts: int = 1):
     """Fill free slots of ``pool`` from ``first_slot`` on with the active particles of ``batch`` (jittable;
     a coupled run keeps its structures in the slots before ``first_slot``, freed or not).
 
@@ -218,21 +218,31 @@ def add_particles_at(pool: Particles, batch: Particles, first_slot: int = 0):
     When it exceeds the capacity nothing is added (the pool comes back unchanged) so the caller
     can stop and report it. Also returns the slot of every batch entry
     (``capacity`` for inactive entries and when nothing was added).
+
+    ``parts``: the pool is split over that many devices in equal parts (a divisor of the capacity). Every
+    per-slot step is then local to the part holding the slot: the free slots are ranked within each part and
+    offset by the free slots of the parts before it (``parts`` counts cross the devices, not the pool), each
+    slot reads the batch entry of its rank from the (small, whole) batch, and the slots of the batch entries
+    are one sum over the parts. The same slots for any ``parts``.
     """
     capacity, batch_size = pool.mass.shape[0], batch.mass.shape[0]
     usable = jnp.arange(capacity) >= first_slot
     free = ~pool.active & usable
     required = jnp.sum(pool.active | ~usable) + jnp.sum(batch.active)
-    free_rank = jnp.cumsum(free) - 1
-    slot_of_rank = jnp.full(batch_size, capacity).at[jnp.where(free, free_rank, batch_size)].set(
-        jnp.arange(capacity), mode="drop")
-    rank = jnp.cumsum(batch.active) - 1
-    target = jnp.where(batch.active & (required <= capacity), slot_of_rank[jnp.clip(rank, 0, batch_size - 1)],
-                       capacity)
-    source = jnp.zeros(capacity, jnp.int32).at[target].set(jnp.arange(batch_size, dtype=jnp.int32), mode="drop")
-    filled = jnp.zeros(capacity, bool).at[target].set(True, mode="drop")
+    by_part = free.reshape(parts, capacity // parts).astype(jnp.int32)
+    before = jnp.cumsum(jnp.sum(by_part, axis=1)) - jnp.sum(by_part, axis=1)  # free slots in the parts before
+    free_rank = (jnp.cumsum(by_part, axis=1) + before[:, None]).reshape(capacity) - 1
+    rank = jnp.cumsum(batch.active) - 1  # of the batch's active entries
+    entry_of_rank = jnp.zeros(batch_size, jnp.int32).at[jnp.where(batch.active, rank, batch_size)].set(
+        jnp.arange(batch_size, dtype=jnp.int32), mode="drop")
+    filled = free & (free_rank < jnp.sum(batch.active)) & (required <= capacity)
+    source = entry_of_rank[jnp.clip(free_rank, 0, batch_size - 1)]
     pool = jax.tree_util.tree_map(lambda p, b: _select(filled, b[source], p), pool, batch)
-    return pool, required, target
+    # the slot of each rank: one slot per filled rank, the others none (-1), summed over the slots
+    slot_of_rank = jnp.zeros(batch_size, jnp.int32).at[jnp.where(filled, free_rank, batch_size)].add(
+        jnp.arange(capacity, dtype=jnp.int32) + 1, mode="drop") - 1
+    target = jnp.where(batch.active, slot_of_rank[jnp.clip(rank, 0, batch_size - 1)], -1)
+    return pool, required, jnp.where(target >= 0, target, capacity)
 
 
 _add_particles_compiled = jax.jit(add_particles)

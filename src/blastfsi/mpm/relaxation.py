@@ -87,8 +87,10 @@ def relax(point: PointState, mass, material, wave_speed, idx, w, gas: tuple, num
     p_star = row_sum(b_I) / safe_a  # p*_I
     gap = jnp.where(has, p_mean - p_star[:, None], 0.0)
     chi = jnp.clip((1.0 - jnp.max(a_I, axis=1) / safe_a) / MIXED, 0.0, 1.0)
-    softest = jnp.zeros(num_nodes, p.dtype).at[idx.reshape(-1)].max(
-        jnp.where((w > 0.0) & ok, 1.0 / safe_k, 0.0).reshape(-1))  # max_p 1 / K_p
+    inverse_k = jnp.where((w > 0.0) & ok, 1.0 / safe_k, 0.0)
+    softest = jnp.zeros(num_nodes, p.dtype)
+    for row in range(idx.shape[0]):  # max_p 1 / K_p, one stencil node at a time (a particle pool split over
+        softest = softest.at[idx[row]].max(inverse_k[row])  # devices stays split; max is exact in any order)
     worst = jnp.max(jnp.abs(gap), axis=1) * softest
     weight = chi * jnp.minimum(1.0, MAX_VOLUME_CHANGE / jnp.where(worst > 0.0, worst, 1.0))
     columns = interpolate(jnp.concatenate([weight[:, None] * gap, (weight * p_star)[:, None] * gap], axis=1))
