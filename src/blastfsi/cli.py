@@ -4,7 +4,7 @@
 ``run`` says on stderr what it is doing (the stages before the first step, then the progress: a bar on a
 terminal, plain lines in a log; ``--quiet``: nothing but errors and warnings) and prints the summary on
 stdout as tables (:func:`blastfsi.report.summary_table`), or with ``--json`` as one JSON object and nothing
-else."""
+else. On several hosts (``--hosts``) every host runs the same command and the first reports and writes."""
 from __future__ import annotations
 
 import argparse
@@ -13,7 +13,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from blastfsi import api, report
+from blastfsi import api, report, runtime, xla
 from blastfsi.api import example_data, example_names
 from blastfsi.io.results import OutputError
 from blastfsi.scenario import ScenarioError, apply_overrides, parse, read_toml
@@ -47,6 +47,15 @@ def _parser() -> argparse.ArgumentParser:
                    help="say nothing on stderr but errors and warnings (no stages, no progress)")
     r.add_argument("--overwrite", action="store_true",
                    help="replace the results of an earlier run in --out (a blastfsi results directory only)")
+    hosts = r.add_argument_group("several hosts", "run this command in one process per host, each with the same "
+                                 "arguments but --process-id; numerics.devices then counts the devices of all "
+                                 "hosts, and the first process writes the results")
+    hosts.add_argument("--hosts", action="store_true",
+                       help="join the other hosts' processes (jax.distributed), as the cluster (SLURM, Open MPI) "
+                            "says, or as the next three options say")
+    hosts.add_argument("--coordinator", metavar="HOST:PORT", help="address of the first process (--process-id 0)")
+    hosts.add_argument("--processes", type=int, metavar="N", help="number of processes")
+    hosts.add_argument("--process-id", type=int, metavar="I", help="this process's number, 0 to N - 1")
     sub.add_parser("examples", help="list the shipped examples")
     kb = sub.add_parser("kb", help="Kingery-Bulmash blast parameters of a TNT charge")
     kb.add_argument("--mass", type=float, required=True, metavar="KG", help="TNT mass [kg]")
@@ -91,6 +100,8 @@ def main(argv: list[str] | None = None) -> int:
         return _kb(args)
     if args.command == "schema":
         return _schema(args)
+    if args.hosts or args.coordinator is not None:
+        runtime.join_hosts(args.coordinator, args.processes, args.process_id)
     try:
         return _run(args)
     except ScenarioError as err:
@@ -123,6 +134,8 @@ def _run(args) -> int:
     except KeyboardInterrupt:  # before the time loop, or a second Ctrl-C
         print("interrupted at once: nothing more written", file=sys.stderr)
         return EXIT_INTERRUPTED
+    if not xla.writes_results():  # (another host's process: the first one reports)
+        return 0
     summary = res.summary
     print(json.dumps(summary) if args.json else report.summary_table(summary))
     print(f"results written to {out}", file=sys.stderr)

@@ -105,7 +105,10 @@ def compilation_cache():
 
 def _claim() -> bool:
     """Whether JAX's cache directory is :func:`cache_directory`, set here where the process has none (and
-    then nothing stored outside runs). JAX reads the directory once, at its first cached compilation."""
+    then nothing stored outside runs). JAX reads the directory once, at its first cached compilation. Not
+    on several hosts (:func:`join_hosts`): their processes would share one cache directory's files."""
+    if xla.processes() > 1:
+        return False
     current = jax.config.jax_compilation_cache_dir
     if current is not None:
         return current in _claimed and cache_directory() is not None
@@ -204,3 +207,15 @@ def _exportable(args) -> bool:
 def _version(text: str) -> tuple[int, ...]:
     """(major, minor) of a version string ("0.10.2", "0.11.0rc1")."""
     return tuple(int(part) for part in re.findall(r"\d+", text)[:2])
+
+
+def join_hosts(coordinator: str | None = None, processes: int | None = None, process_id: int | None = None):
+    """Join this process to a run over several hosts (``jax.distributed``): call it in every process, before
+    anything else uses JAX. Then ``numerics.devices`` counts the devices of all hosts, each process steps its
+    devices' part of the split grid or particle pool, and the first process writes the results (the others
+    run the same program and write nothing the user sees). ``coordinator``: "host:port" of the first
+    process, ``processes`` their number, ``process_id`` this one's (0 for the first); all None where the
+    cluster says them (SLURM, Open MPI: see ``jax.distributed.initialize``). CPU devices exchange their
+    data through gloo."""
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    jax.distributed.initialize(coordinator, processes, process_id)

@@ -29,6 +29,7 @@ import logging
 import re
 import signal
 import sys
+import tempfile
 import threading
 import time as wallclock
 from dataclasses import dataclass, field
@@ -40,7 +41,7 @@ import numpy as np
 
 from blastfsi import method as methods
 from blastfsi import report
-from blastfsi import runtime
+from blastfsi import runtime, xla
 from blastfsi.io import results
 from blastfsi.scenario import ScenarioBase, ScenarioError, expand, parse  # noqa: F401  (parse: for scripts)
 from blastfsi.timeloop import FAULT_DT_COLLAPSE, FAULT_MESSAGES, FAULT_NONE, FAULT_POOL_FULL
@@ -131,7 +132,7 @@ def _gauge_histories(hist: dict, position: np.ndarray) -> dict:
 
 def _members(state) -> list:
     """The batched state as one NumPy state per member."""
-    host = jax.device_get(state)
+    host = xla.to_host(state)
     n = np.shape(host.t)[0]
     return [jax.tree_util.tree_map(lambda leaf: leaf[k], host) for k in range(n)]
 
@@ -245,18 +246,34 @@ def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = F
     the ``blastfsi`` logger, e.g. a charge's 1D detonation, are shown as stage lines). The run computes in
     ``numerics.precision`` and keeps its compiled time loop in the persistent cache
     (:mod:`blastfsi.runtime`)."""
-    bar = _Progress(progress)
+    bar = _Progress(progress and xla.writes_results())
     with bar.logged():
         bar.stage("validating the scenario")
         sc, members, member_scs = expand(data)
-        with runtime.precision(sc.numerics.precision), runtime.compilation_cache():  # (both restored after the run)
-            return _run(sc, members, member_scs, out, overwrite=overwrite, bar=bar, restart=restart,
+        with (runtime.precision(sc.numerics.precision), runtime.compilation_cache(),  # (both restored after the run)
+              _written_here(out) as target):
+            return _run(sc, members, member_scs, out, target, overwrite=overwrite, bar=bar, restart=restart,
                         chunk_steps=chunk_steps)
 
 
-def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | None, *, overwrite: bool,
-         bar: _Progress, restart: bool, chunk_steps: int) -> Result:
-    """:func:`run` of the validated scenario ``sc`` (its members' overrides and scenarios), in its precision."""
+@contextlib.contextmanager
+def _written_here(out: Path | None):
+    """Where this process writes the results of a run that writes ``out``: ``out`` itself, or, in the other
+    processes of a run over several hosts (:func:`blastfsi.xla.writes_results`), a scratch directory removed
+    after the run. They write the same files there, so every process takes the same steps: the transfers of
+    the split state to the host that the writing needs are collectives (:func:`blastfsi.xla.to_host`)."""
+    if out is None or xla.writes_results():
+        yield out
+        return
+    with tempfile.TemporaryDirectory(prefix=f"blastfsi-process{jax.process_index()}-") as scratch:
+        yield Path(scratch) / "results"
+
+
+def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path | None, out: Path | None, *,
+         overwrite: bool, bar: _Progress, restart: bool, chunk_steps: int) -> Result:
+    """:func:`run` of the validated scenario ``sc`` (its members' overrides and scenarios), in its precision;
+    ``source``: the results directory of the run (read on restart), ``out``: where this process writes it
+    (:func:`_written_here`)."""
     method = methods.get(sc.method)
     setups = []
     for k, s in enumerate(member_scs):
@@ -280,7 +297,9 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
 
     last_ckpt = None
     if restart:
-        last_ckpt, setups, state = _restored(out, method, setups, state)
+        last_ckpt, setups, state = _restored(source, method, setups, state)
+        if out != source:  # (another host's scratch copy)
+            out.mkdir(parents=True)
         bar.stage(f"continuing from {last_ckpt} (t = {report.quantity(float(np.min(np.asarray(state.t))), 's')})")
         static = method.static(setups[0], member_scs[0])
     elif out is not None:
@@ -331,7 +350,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
 
         try:
             if out is not None and not restart and field_times and field_times[0] == begin:
-                outputs(begin, jax.device_get(state))
+                outputs(begin, xla.to_host(state))
             for t_stop in (t for t in stops if t > t_start):
                 while not ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
                     state = timed("loop", advanced, state, t_stop)
@@ -348,13 +367,13 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
                         continue
                     stop = _stop_reason(state, method, setups, sc)
                     if stop is not None:  # (the history up to it is kept, as are the snapshots and checkpoints)
-                        raise SimulationError(f"{stop}; {rec.failed(jax.device_get(state), stop)}")
+                        raise SimulationError(f"{stop}; {rec.failed(xla.to_host(state), stop)}")
                     bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))))
                 if ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
                     break
                 if out is None:
                     continue
-                host = jax.device_get(state)
+                host = xla.to_host(state)
                 outputs(t_stop, host)
                 if ctrl_c.pressed:
                     break
@@ -363,11 +382,11 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, out: Path | No
         finally:
             bar.finish()
 
-        host = jax.device_get(state)
+        host = xla.to_host(state)
         t_now = float(np.min(host.t))
         interrupted = ctrl_c.pressed and t_now < stops[-1]
         summaries = summary(host, "interrupted" if interrupted else "complete")
-        result = Result(sc, members, setups, summaries, _histories(method, setups, sc, host), state, out, method,
+        result = Result(sc, members, setups, summaries, _histories(method, setups, sc, host), state, source, method,
                         sorted(rec.snapshots))
         if out is not None:
             if interrupted and rec.ckpt_time != t_now:

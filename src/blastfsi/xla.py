@@ -18,6 +18,7 @@ import operator
 
 import jax
 import jax.numpy as jnp
+from jax.experimental import multihost_utils
 
 
 def device_control_flow() -> bool:
@@ -95,6 +96,28 @@ def row_sum(a):
 
 
 SPLIT_AXIS = "x"  # the mesh axis an array is split along (split_sharding: a grid's x, a particle pool)
+
+
+def processes() -> int:
+    """How many processes share the devices: 1, or the hosts joined by :func:`blastfsi.runtime.join_hosts`."""
+    return jax.process_count() if jax.distributed.is_initialized() else 1
+
+
+def writes_results() -> bool:
+    """Whether this process writes a run's results: the only one, or the first of several hosts (the others
+    compute their part of every step and write nothing the user sees)."""
+    return processes() == 1 or jax.process_index() == 0
+
+
+def to_host(tree):
+    """``tree`` as NumPy arrays in this process. Where several processes share the devices, an array split
+    over devices of other hosts is gathered from all of them (every process must then call this at the same
+    point: it is a collective); arrays this process holds whole are copied as they are."""
+    def one(a):
+        if isinstance(a, jax.Array) and not a.is_fully_addressable:
+            return multihost_utils.process_allgather(a, tiled=True)
+        return jax.device_get(a)
+    return jax.tree_util.tree_map(one, tree)
 
 
 def visible_devices() -> int:
