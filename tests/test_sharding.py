@@ -316,6 +316,21 @@ def test_more_devices_than_this_process_sees_refused_before_the_run():
         run(_sedov(visible + 1, cells=32 * (visible + 1)))
 
 
+def test_cfdmp_devices_checked_naming_the_key():
+    from blastfsi.simulation import run
+    import jax
+
+    data = tomllib.loads((files("blastfsi.examples") / "cfdmp-shock-tube.toml").read_text())
+    for bad in (0, -1, "some", 2.0):
+        data.setdefault("numerics", {})["devices"] = bad
+        with pytest.raises(ScenarioError, match="numerics.devices"):
+            expand(data)
+    visible = len(jax.devices())
+    data["numerics"]["devices"] = visible + 1
+    with pytest.raises(ScenarioError, match=rf"numerics.devices = {visible + 1}: only {visible} device"):
+        run(data)
+
+
 def test_the_lagrangian_chain_has_no_devices_key():
     data = tomllib.loads((files("blastfsi.examples") / "plate1d-sedov.toml").read_text())
     data.setdefault("numerics", {})["devices"] = 2
