@@ -10,11 +10,13 @@ would show.
 
     python benchmarks/plate_kb_load.py rz 4 [--mass 1.094] [--factor 1.0] [--clamp sliding] [--end 5.5e-4]
     python benchmarks/plate_kb_load.py 3d 2
-    python benchmarks/plate_kb_load.py all       # the set below, into benchmarks/plate_kb_load.json (~5 min)
+    python benchmarks/plate_kb_load.py all       # the set below, into benchmarks/plate_kb_load.json (~2 min)
 
 Prints one JSON line per run (peak delta/t, its time, steps, wall time). ``all``: r-z with 4 cells across t
 (the shipped resolution) for case 1 (0.468 kg) and case 4 (1.094 kg), clamp fixed and sliding, to 1.2 ms (the
-sliding plate peaks at ~0.7 ms); and r-z against a 3D quarter model with 2 cells across t, case 1, fixed.
+sliding plate peaks at ~0.7 ms), the fixed clamp also perfectly plastic (flow stress A, no hardening or rate
+effect: the material of the rigid-plastic references); r-z against a 3D quarter model with 2 cells across t,
+case 1, fixed; and the rigid-plastic membrane mode solution of the same plate under the same load.
 """
 from __future__ import annotations
 
@@ -39,7 +41,7 @@ STANDOFF = 0.1  # m, case 1 and case 4
 
 
 def main(kind: str, cells_per_t: int, factor: float = 1.0, mass: float = 0.468, t_end: float = 5.5e-4,
-         clamp: str = "fixed") -> dict:
+         clamp: str = "fixed", perfectly_plastic: bool = False) -> dict:
     rho = lookup("steel-rha").density
     build = mpm_method.MPM.build
     delivered = {}
@@ -62,6 +64,8 @@ def main(kind: str, cells_per_t: int, factor: float = 1.0, mass: float = 0.468, 
         for body in sc["bodies"]:
             for support in body["supports"]:
                 support["hold"] = ["y" if kind == "rz" else "z"]
+    if perfectly_plastic:  # flow stress A: no hardening, no rate effect (the rigid-plastic references' sigma0)
+        sc.setdefault("materials", {})["steel-rha"] = {"B": 0.0, "C": 0.0}
     started = time.perf_counter()
     mpm_method.MPM.build = loaded
     try:
@@ -72,11 +76,23 @@ def main(kind: str, cells_per_t: int, factor: float = 1.0, mass: float = 0.468, 
     w = np.asarray(res.history["tracer0_displacement_z"])
     k = int(np.argmax(w))
     out = {"kind": kind, "cells_across_t": cells_per_t, "factor": factor, "mass": mass, "clamp": clamp,
+           "perfectly_plastic": perfectly_plastic,
            "delivered_impulse_Ns": delivered["impulse_Ns"],
            "peak_delta_over_t": float(w[k] / mps.T), "t_peak": float(t[k]), "steps": int(res.summary["steps"]),
            "particles": int(res.summary["particles"]), "total_s": time.perf_counter() - started,
            "energy_balance_relative": res.summary["energy_balance_relative"]}
     print(json.dumps(out), flush=True)
+    return out
+
+
+def membrane_references() -> dict:
+    """The rigid-plastic membrane mode solution (blastfsi.exact.rigid_plastic_plate, Symonds & Wierzbicki) of the
+    same plate (flow stress = Johnson-Cook A) under the same ConWep impulse: the centre's delta/t and its time."""
+    plate = mps.plate()
+    out = {}
+    for case, mass in (("case1", 0.468), ("case4", 1.094)):
+        ratio, t = plate.membrane_mode(lambda r, m=mass: plate_load(m, STANDOFF, r)["impulse"])
+        out[case] = {"mass": mass, "delta_over_t": ratio, "t": t}
     return out
 
 
@@ -87,11 +103,12 @@ def run_all() -> None:
     for case, mass in (("case1", 0.468), ("case4", 1.094)):
         for clamp in ("fixed", "sliding"):
             runs[f"rz-c4-{case}-{clamp}"] = main("rz", 4, 1.0, mass, 1.2e-3, clamp)
+        runs[f"rz-c4-{case}-fixed-perfectly-plastic"] = main("rz", 4, 1.0, mass, 1.2e-3, "fixed", True)
     runs["rz-c2-case1-fixed"] = main("rz", 2, 1.0, 0.468, 5.5e-4, "fixed")
     runs["3d-c2-case1-fixed"] = main("3d", 2, 1.0, 0.468, 5.5e-4, "fixed")
     out = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs", "standoff_m": STANDOFF,
            "load": "ConWep oblique-reflection impulse I(r) as the initial velocity I(r) / (rho t) of the free span",
-           "runs": runs}
+           "runs": runs, "membrane_mode": membrane_references()}
     (Path(__file__).parent / "plate_kb_load.json").write_text(json.dumps(out, indent=1) + "\n")
 
 

@@ -1,5 +1,5 @@
-"""Fully clamped circular plate under a uniform impulsive load: the rigid-plastic
-(Jones) solution and the Nurick–Martin empirical fit, as validated callables.
+"""Fully clamped circular plate under an impulsive load: the rigid-plastic
+(Jones) solution, the Nurick–Martin empirical fit and the membrane mode solution, as validated callables.
 
 Problem. A circular plate of free radius R, thickness H, density rho and flow
 (yield) stress sigma0, fully clamped at r = R (no rotation, no pull-in), is given
@@ -73,6 +73,29 @@ and for a uniform impulse phi_c = lambda^(1/2) exactly (I = pi R^2 rho H V0).
    studies", Int. J. Impact Eng. 8 (1989) 171-186. phi_c uses the static yield stress of
    the (strongly rate-sensitive) mild steel, so the fit's slope, about half of Jones's
    0.817, carries that steel's rate effect; applied to another steel it is indicative only.
+
+3. The membrane mode solution for any axisymmetric impulse (:meth:`ClampedCircularPlate.membrane_mode`):
+   a rigid, perfectly plastic membrane without bending resistance, flowing in equal biaxial tension
+   N_r = N_theta = N0 = sigma0 H (von Mises and Tresca alike), with small slopes, moves by
+
+       rho H d2w/dt2 = N0 (1/r) d/dr (r dw/dr),   w(R, t) = 0,   w(r, 0) = 0,   dw/dt(r, 0) = i(r) / (rho H),
+
+   the linear wave equation with the membrane wave speed c = (sigma0 / rho)^(1/2), as long as every point
+   still stretches; a point stops (its plastic flow ends) where its velocity first vanishes, so its
+   permanent deflection is its first maximum. Source: P. S. Symonds and T. Wierzbicki, "Membrane mode
+   solutions for impulsively loaded circular plates", J. Appl. Mech. 46 (1979) 58-64; re-derived for an
+   arbitrary impulse distribution by S. A. E. Alotaibi, S. E. Rigby, M. Guadagnini and A. Tyas, "Rigid-plastic
+   membrane response of thin plates under impulsive blast loads using the extended Hamilton principle",
+   Int. J. Impact Eng. 178 (2023) 104624. The centre's motion is the Fourier-Bessel series
+
+       w(0, t) = sum_n (beta_n / omega_n) sin(omega_n t),   omega_n = j_n c / R,
+       beta_n = 2 / (R^2 J1(j_n)^2) int_0^R (i(r) / (rho H)) J0(j_n r / R) r dr,
+
+   j_n the zeros of J0. For a uniform impulse the centre keeps V0 until the unloading wave from the clamp
+   arrives, at t = R / c, and then stops: W_f / H = V0 R / (c H) = lambda^(1/2), 1.22 x Jones's membrane
+   limit (whose one-mode approximation loses a third of the kinetic energy). Validity: deflections
+   large against the thickness (bending resistance M0 neglected: for a rigid-plastic plate the solution
+   overestimates the deflection, by less as delta/t grows), and the rigid-plastic conditions of item 1.
 
 SI units throughout; every function accepts NumPy scalars or arrays for the load.
 """
@@ -170,6 +193,32 @@ class ClampedCircularPlate:
     def membrane_limit(self, velocity):
         """Large-deflection limit of :meth:`jones`: (2 lambda / 3)^(1/2) = 0.8165 phi_c."""
         return np.sqrt(2.0 * self.lam(velocity) / 3.0)
+
+    def membrane_mode(self, specific_impulse, modes: int = 400):
+        """(delta/t, t) of the centre's permanent deflection and the time it is reached, for the membrane
+        mode solution (module docstring, item 3) under the specific impulse ``specific_impulse(r)`` [Pa s]
+        (a vectorised callable of the radius r [m], 0 <= r <= R), from ``modes`` terms of the series."""
+        from scipy.special import j0, j1, jn_zeros
+
+        if not isinstance(modes, int) or modes < 10:
+            raise ValueError(f"modes: expected an integer >= 10, got {modes!r}")
+        R, rho, H = self.radius, self.density, self.thickness
+        c = np.sqrt(self.flow_stress / rho)
+        n = 16 * modes  # midpoint rule, ~16 points per period of the fastest J0(j_n r / R)
+        r = (np.arange(n) + 0.5) * (R / n)
+        weight = np.full(n, R / n)
+        v0 = _load("specific_impulse", specific_impulse(r)) / (rho * H)
+        zeros = jn_zeros(0, modes)
+        beta = 2.0 / (R ** 2 * j1(zeros) ** 2) * ((j0(np.outer(zeros, r) / R) * (v0 * r)) @ weight)
+        omega = zeros * c / R
+        t = np.linspace(0.0, 4.0 * R / c, 8001)[1:]
+        w = (beta / omega) @ np.sin(np.outer(omega, t))
+        # the first maximum: the largest value before w falls below 0.9 of its running maximum (the truncated
+        # series rings where the velocity jumps, e.g. under a uniform impulse when the clamp's wave arrives)
+        running = np.maximum.accumulate(w)
+        fallen = np.nonzero(w < 0.9 * running)[0]
+        k = int(np.argmax(w[:fallen[0]] if fallen.size else w))
+        return float(w[k] / H), float(t[k])
 
     def nurick_martin(self, impulse):
         """Nurick & Martin's empirical delta/t = 0.425 phi_c + 0.277 of a uniform impulse I [N s]."""
