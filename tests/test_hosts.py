@@ -30,16 +30,14 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _on_two_hosts(name: str, overrides: dict, out) -> list:
-    """Run ``name`` as two processes of two devices each; their (returncode, stdout, stderr)."""
+def _on_two_hosts(arguments: list) -> list:
+    """``blastfsi run`` with ``arguments`` as two processes of two devices each; their (returncode, stdout,
+    stderr)."""
     port = _free_port()
-    sets = [arg for k, v in {**overrides, **QUIET, "numerics.devices": 4}.items()
-            for arg in ("--set", f"{k}={json.dumps(v)}")]
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2", "JAX_PLATFORMS": "cpu",
            "BLASTFSI_NO_CACHE": "1"}
-    procs = [subprocess.Popen([sys.executable, "-m", "blastfsi.cli", "run", "--example", name, *sets, "--out",
-                               str(out), "--json", "-q", "--hosts", "--coordinator", f"127.0.0.1:{port}",
-                               "--processes", "2", "--process-id", str(k)],
+    procs = [subprocess.Popen([sys.executable, "-m", "blastfsi.cli", "run", *arguments, "--json", "-q", "--hosts",
+                               "--coordinator", f"127.0.0.1:{port}", "--processes", "2", "--process-id", str(k)],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env) for k in (0, 1)]
     outputs = [p.communicate(timeout=600) for p in procs]
     return [(p.returncode, *o) for p, o in zip(procs, outputs)]
@@ -59,7 +57,9 @@ def _worst(ref: dict, other: dict) -> float:
 def test_two_hosts_give_the_one_device_run(tmp_path, name):
     overrides, bound = CASES[name]
     out = tmp_path / "two-hosts"
-    (code0, stdout0, err0), (code1, stdout1, err1) = _on_two_hosts(name, overrides, out)
+    sets = [arg for k, v in {**overrides, **QUIET, "numerics.devices": 4}.items()
+            for arg in ("--set", f"{k}={json.dumps(v)}")]
+    (code0, stdout0, err0), (code1, stdout1, err1) = _on_two_hosts(["--example", name, *sets, "--out", str(out)])
     assert code0 == 0, err0[-3000:]
     assert code1 == 0, err1[-3000:]
     assert any(line.startswith("{") for line in stdout0.splitlines())  # the first process reports
@@ -76,3 +76,24 @@ def test_two_hosts_give_the_one_device_run(tmp_path, name):
     for g_one, g_two in zip(one.summary.get("gauges", []), summary.get("gauges", [])):
         for key in ("peak_overpressure", "impulse"):
             assert abs(g_two[key] - g_one[key]) <= bound * abs(g_one[key]), key
+
+
+def test_a_checkpoint_continues_on_two_hosts(tmp_path):
+    """sedov-2d on two hosts (4 devices) with a checkpoint halfway; its last checkpoint removed, the run is
+    continued by two new processes (both read the checkpoint; the first writes): the one-device run's final
+    fields to round-off."""
+    overrides = {**CASES["sedov-2d"][0], **QUIET, "output.checkpoint_interval": 0.05}
+    out = tmp_path / "run"
+    sets = [arg for k, v in {**overrides, "numerics.devices": 4}.items() for arg in ("--set", f"{k}={json.dumps(v)}")]
+    for code, _, err in _on_two_hosts(["--example", "sedov-2d", *sets, "--out", str(out)]):
+        assert code == 0, err[-3000:]
+    checkpoints = sorted((out / "checkpoints").glob("ckpt_*.h5"))
+    assert len(checkpoints) == 2
+    checkpoints[-1].unlink()
+    for code, _, err in _on_two_hosts(["--restart", str(out)]):
+        assert code == 0, err[-3000:]
+    assert len(list((out / "checkpoints").glob("ckpt_*.h5"))) == 2  # the end's checkpoint written again
+    one = api.run("sedov-2d", out=tmp_path / "one-device", set=overrides)
+    end = one.scenario.time.end
+    again = dataclasses.replace(one, out_dir=out)  # (the snapshots the continued run rewrote)
+    assert _worst(one.fields(time=end), again.fields(time=end)) <= RELATIVE

@@ -298,8 +298,8 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
     last_ckpt = None
     if restart:
         last_ckpt, setups, state = _restored(source, method, setups, state)
-        if out != source:  # (another host's scratch copy)
-            out.mkdir(parents=True)
+        if out != source:  # (another host's scratch copy: a fresh results directory)
+            results.prepare_directory(out, overwrite=False)
         bar.stage(f"continuing from {last_ckpt} (t = {report.quantity(float(np.min(np.asarray(state.t))), 's')})")
         static = method.static(setups[0], member_scs[0])
     elif out is not None:
