@@ -53,7 +53,7 @@ def _worst(ref: dict, other: dict) -> float:
     return out
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
+@pytest.mark.parametrize("name", [pytest.param("sedov-2d"), pytest.param("taylor-bar", marks=pytest.mark.slow)])
 def test_two_hosts_give_the_one_device_run(tmp_path, name):
     overrides, bound = CASES[name]
     out = tmp_path / "two-hosts"
@@ -78,6 +78,7 @@ def test_two_hosts_give_the_one_device_run(tmp_path, name):
             assert abs(g_two[key] - g_one[key]) <= bound * abs(g_one[key]), key
 
 
+@pytest.mark.slow
 def test_a_checkpoint_continues_on_two_hosts(tmp_path):
     """sedov-2d on two hosts (4 devices) with a checkpoint halfway; its last checkpoint removed, the run is
     continued by two new processes (both read the checkpoint; the first writes): the one-device run's final

@@ -91,6 +91,32 @@ SCRIPT = textwrap.dedent('''
         return {"permutes": op_sizes(exe, "collective-permute"), "gathers": op_sizes(exe, "all-gather"),
                 "all_to_all": len(op_sizes(exe, "all-to-all")), "cells": cells, "plane": planes}
 
+    def cfdmp_split(data):  # one and two devices: the particles and the grid, the compiled loop's collectives
+        out, ref = {}, None
+        for n in (1, 2):
+            res = simulation.run(with_devices(data, n))
+            P = res.state.mpm.particles
+            on = np.asarray(P.active)[0]
+            state = {"x": np.asarray(P.x)[0][on], "stress": np.asarray(P.point.stress)[0][on],
+                     "U": np.asarray(res.state.U)}
+            v, c = np.asarray(P.v)[0][on], float(np.max(np.asarray(P.wave_speed)[0][on]))
+            entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"],
+                     "pool": int(on.size), "active": int(on.sum())}
+            if ref is None:
+                ref = (state, res.summary["steps"], v, c)
+            else:  # velocities against the sound speed (a gas at rest has round-off velocities only)
+                entry.update(fields={**worst(ref[0], state), "v": float(np.max(np.abs(v - ref[2]))) / ref[3]},
+                             steps_ref=ref[1])
+                exe = list(methods._EXECUTABLES.values())[-1]
+                entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
+            out[f"cfdmp/{n}"] = entry
+        return out
+
+    if sys.argv[2:] == ["slow"]:  # he-slab-2d to 12 steps after the coupling starts
+        print("REPORT" + json.dumps(cfdmp_split(example("he-slab-2d", **{"time.end": 1.62e-5, "output.fields": 0,
+                                                                         "output.plots": False}))))
+        sys.exit(0)
+
     report = {"visible": len(jax.devices())}
     cases = {
         "sedov-2d": (example("sedov-2d", **{"grid.cells": 32, "time.end": 0.1, "output.fields": 0,
@@ -140,25 +166,10 @@ SCRIPT = textwrap.dedent('''
             entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
         report[f"mpm/{n}"] = entry
 
-    # cfdmp: the MPM region's pool split over 2 devices (the Eulerian grid whole on each), he-slab-2d to 12 steps
-    # after the coupling starts (see the test's docstring for why not further)
-    slab = example("he-slab-2d", **{"time.end": 1.62e-5, "output.fields": 0, "output.plots": False})
-    ref = None
-    for n in (1, 2):
-        res = simulation.run(with_devices(slab, n))
-        P = res.state.mpm.particles
-        on = np.asarray(P.active)[0]
-        state = {"x": np.asarray(P.x)[0][on], "v": np.asarray(P.v)[0][on],
-                 "stress": np.asarray(P.point.stress)[0][on], "U": np.asarray(res.state.U)}
-        entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"], "pool": int(on.size),
-                 "active": int(on.sum())}
-        if ref is None:
-            ref = (state, res.summary["steps"])
-        else:
-            entry.update(fields=worst(ref[0], state), steps_ref=ref[1])
-            exe = list(methods._EXECUTABLES.values())[-1]
-            entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
-        report[f"cfdmp/{n}"] = entry
+    # cfdmp: the MPM region's pool split over 2 devices (the Eulerian grid whole on each), cfdmp-shock-tube to 0.1 ms
+    # (he-slab-2d, a 2D coupled run, in the slow test below)
+    report.update(cfdmp_split(example("cfdmp-shock-tube", **{"time.end": 1e-4, "output.fields": 0,
+                                                             "output.plots": False})))
 
     # a cfdmp checkpoint written on 2 devices, continued on 1 (the shock tube's pool, 302 slots, divides into both)
     out = pathlib.Path(sys.argv[1]) / "tube"
@@ -202,14 +213,32 @@ SCRIPT = textwrap.dedent('''
 ''')
 
 
-def _split_runs(folder):
-    """The report of the 8-device subprocess (SCRIPT)."""
+def _check_cfdmp_split(entry, gas_particles: int):
+    """cfdmp on 2 devices against 1: the pool split, the particles and the grid to round-off, the compiled loop
+    adding the nodal and per-cell sums across devices and gathering no pool-sized array."""
+    assert entry["devices_used"] == 2 and entry["steps"] == entry["steps_ref"], entry
+    assert entry["active"] > gas_particles, entry  # the coupling started: the box's gas is particles
+    assert max(entry["fields"].values()) <= RELATIVE_MPM, entry["fields"]
+    hlo = entry["hlo"]
+    assert hlo["all-reduce"] and max(hlo["all-reduce"]) < entry["pool"], hlo
+    assert all(size < entry["pool"] for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo
+
+
+@pytest.mark.slow
+def test_coupled_2d_split_on_two_virtual_devices(tmp_path):
+    """he-slab-2d (cfdmp, 2D) with the pool on 2 devices: the one-device run's particles and grid to round-off
+    12 steps after the coupling starts (see test_split_runs_on_eight_virtual_devices for why not further)."""
+    _check_cfdmp_split(_split_runs(tmp_path, "slow")["cfdmp/2"], gas_particles=20000)
+
+
+def _split_runs(folder, *args):
+    """The report of the 8-device subprocess (SCRIPT; ``args`` after the folder)."""
     script = folder / "split_runs.py"
     script.write_text(SCRIPT)
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=8", "JAX_PLATFORMS": "cpu",
            "BLASTFSI_NO_CACHE": "1"}
-    proc = subprocess.run([sys.executable, str(script), str(folder)], capture_output=True, text=True, env=env,
-                          timeout=600)
+    proc = subprocess.run([sys.executable, str(script), str(folder), *args], capture_output=True, text=True,
+                          env=env, timeout=600)
     assert proc.returncode == 0, proc.stderr[-4000:]
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("REPORT"))
     return json.loads(line[len("REPORT"):])
@@ -233,14 +262,16 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
       sums across devices (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
       a checkpoint written on 2 devices continues on 1;
     * 3D (sedov-3d, 16^3, 2 devices): the split grid gives the one-device run to round-off and exchanges halos;
-    * cfdmp (he-slab-2d): the MPM region's pool split over 2 devices, the Eulerian grid whole on each, gives the
-      one-device run's particles and grid to round-off 12 steps after the coupling starts; the compiled loop adds
-      the nodal and per-cell sums across devices and gathers no pool-sized array (particles are emitted into
-      free slots ranked per device, mpm.add_particles_at). Not further: the bridge compares sums with
-      thresholds (a reservoir's mass against a share of a particle's, coupling.feed), and the other order of
-      the nodal sums flips one of them a few steps later (measured: step 115 of this run, one particle
-      emitted a step earlier), after which the runs differ by that discrete event, not by round-off; a
-      cfdmp checkpoint written on 2 devices continues on 1 (cfdmp-shock-tube);
+    * cfdmp (cfdmp-shock-tube to 0.1 ms here, he-slab-2d in the slow test): the MPM region's pool split over 2
+      devices, the Eulerian grid whole on each, gives the one-device run's particles and grid to round-off; the
+      compiled loop adds the nodal and per-cell sums across devices and gathers no pool-sized array (particles
+      are emitted into free slots ranked per device, mpm.add_particles_at: one cumsum over the pool made the
+      shock tube's loop all-gather its slot ranks). he-slab-2d is held to round-off for 12 steps after the
+      coupling starts, not further: the bridge compares sums with thresholds (a reservoir's mass against a
+      share of a particle's, coupling.feed), and the other order of the nodal sums flips one of them a few
+      steps later (measured: step 115 of that run, one particle emitted a step earlier), after which the runs
+      differ by that discrete event, not by round-off; a cfdmp checkpoint written on 2 devices continues on 1
+      (cfdmp-shock-tube);
     * more devices than visible, and "all" not dividing the cells, are refused naming the key."""
     measured = _split_runs(tmp_path)
     assert measured["visible"] == 8
@@ -271,13 +302,7 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
     pool = measured["mpm/2"]["pool"]
     assert hlo["all-reduce"] and max(hlo["all-reduce"]) < pool, hlo  # the nodal sums, added across devices
     assert all(size < pool for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo  # particles stay put
-    entry = measured["cfdmp/2"]  # cfdmp: the pool split, the grid whole
-    assert entry["devices_used"] == 2 and entry["steps"] == entry["steps_ref"], entry
-    assert entry["active"] > 20000, entry  # the coupling started: the box's gas is particles
-    assert max(entry["fields"].values()) <= RELATIVE_MPM, entry["fields"]
-    hlo = entry["hlo"]
-    assert hlo["all-reduce"] and max(hlo["all-reduce"]) < entry["pool"], hlo  # nodal and per-cell sums
-    assert all(size < entry["pool"] for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo
+    _check_cfdmp_split(measured["cfdmp/2"], gas_particles=100)
     entry = measured["cfdmp_restart"]
     assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
     entry = measured["mpm_restart"]
