@@ -85,3 +85,17 @@ def test_exponential_and_sedov_examples_run(tmp_path):
     for k in (0, 1):
         assert read_history(tmp_path / "s" / f"history_member{k}.csv")["time"][-1] == 0.004
         assert (tmp_path / "s" / "fields" / f"member{k}.xdmf").is_file()
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--processes", "2"], "--processes given without --coordinator, --process-id"),
+    (["--coordinator", "127.0.0.1:1", "--process-id", "0"], "--coordinator, --process-id given without --processes"),
+    (["--coordinator", "127.0.0.1:1", "--processes", "2", "--process-id", "2"],
+     "--process-id 2 with --processes 2: expected --processes >= 1 and 0 <= --process-id <= 1"),
+    (["--coordinator", "127.0.0.1:1", "--processes", "0", "--process-id", "0"], "expected --processes >= 1"),
+])
+def test_several_hosts_flags_checked_before_joining(tmp_path, flags, message):
+    proc = cli("run", "--example", "sod", "--out", str(tmp_path / "r"), *flags)
+    assert proc.returncode == 2, proc.stderr
+    assert message in proc.stderr
+    assert not (tmp_path / "r").exists()

@@ -100,9 +100,9 @@ def main(argv: list[str] | None = None) -> int:
         return _kb(args)
     if args.command == "schema":
         return _schema(args)
-    if args.hosts or args.coordinator is not None:
-        runtime.join_hosts(args.coordinator, args.processes, args.process_id)
     try:
+        if _joins_hosts(args):
+            runtime.join_hosts(args.coordinator, args.processes, args.process_id)
         return _run(args)
     except ScenarioError as err:
         print(f"error: {err}", file=sys.stderr)
@@ -110,6 +110,21 @@ def main(argv: list[str] | None = None) -> int:
     except OutputError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_OUTPUT
+
+
+def _joins_hosts(args) -> bool:
+    """Whether ``run`` joins other hosts' processes; ScenarioError naming the flags where the three explicit
+    ones are not given together or the process number is out of range."""
+    explicit = {"--coordinator": args.coordinator, "--processes": args.processes, "--process-id": args.process_id}
+    given = [flag for flag, value in explicit.items() if value is not None]
+    if given and len(given) < 3:
+        missing = [flag for flag in explicit if flag not in given]
+        raise ScenarioError(f"{', '.join(given)} given without {', '.join(missing)}: the three go together (or "
+                            "none of them, with --hosts alone under SLURM or Open MPI)")
+    if given and not (args.processes >= 1 and 0 <= args.process_id < args.processes):
+        raise ScenarioError(f"--process-id {args.process_id} with --processes {args.processes}: expected "
+                            f"--processes >= 1 and 0 <= --process-id <= {args.processes - 1}")
+    return args.hosts or bool(given)
 
 
 def _run(args) -> int:
