@@ -140,6 +140,12 @@ def device_count(requested, key: str = "numerics.devices") -> int:
     return n
 
 
+def equal_parts(count: int, n_devices: int) -> int:
+    """``count`` rounded up to a multiple of ``n_devices``: an array axis that splits into equal parts (a particle
+    pool's slots, :func:`split_sharding`)."""
+    return -(-count // n_devices) * n_devices
+
+
 def split_sharding(n_devices: int, ndim: int, axis: int = 0):
     """The placement of an array of ``ndim`` axes split along ``axis`` in ``n_devices`` equal parts over the
     first ``n_devices`` devices (a 1D mesh, axis SPLIT_AXIS), the other axes whole; None for one device (the

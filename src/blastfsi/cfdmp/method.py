@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from blastfsi import euler as ek
-from blastfsi import mpm, timeloop
+from blastfsi import mpm, timeloop, xla
 from blastfsi.cfdmp import coupling as cp
 from blastfsi.cfdmp.scenario import CfdmpScenario
 from blastfsi.diagnostics import blast_maps, damage
@@ -412,7 +412,7 @@ class Cfdmp:
         in use keep their indices); None when ``numerics.capacity`` fixed the pool."""
         if not setup.coupling.capacity_grows:
             return None
-        capacity = -(-capacity // setup.devices) * setup.devices  # (equal parts per device)
+        capacity = xla.equal_parts(capacity, setup.devices)
         P = state.mpm.particles
         pad = mpm.empty(capacity - setup.capacity, P.point.history.shape[1], P.mass.dtype)
         grown = jax.tree_util.tree_map(lambda a, b: np.concatenate([np.asarray(a), np.asarray(b)]), P, pad)

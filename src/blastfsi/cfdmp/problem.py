@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blastfsi import mpm
+from blastfsi import mpm, xla
 from blastfsi.cfdmp import coupling as cp_kernels
 from blastfsi.cfdmp.scenario import FICTITIOUS_DEPTH, CfdmpScenario
 from blastfsi.constitutive import get as get_model
@@ -293,7 +293,7 @@ def build(sc: CfdmpScenario, devices: int = 1) -> Setup:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the structures ({n_struct}) and the gas "
                             f"of the MPM box ({at_start}) need {n_struct + at_start} particles; set "
                             f"numerics.capacity >= {n_struct + at_start} (the bridge creates more as gas flows in)")
-    capacity = -(-capacity // devices) * devices
+    capacity = xla.equal_parts(capacity, devices)
 
     # ring cells: MPM-grid cells outside the box
     ring = np.ones(shape, bool)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blastfsi import mpm
+from blastfsi import mpm, xla
 from blastfsi.constitutive import get as get_model
 from blastfsi.constitutive import models as _models  # noqa: F401  (registers the constitutive models)
 from blastfsi.eos import jwl
@@ -291,7 +291,7 @@ def build(sc: MPMScenario, devices: int = 1) -> Setup:
     if capacity < n:
         raise ScenarioError(f"numerics.capacity = {capacity} is too small: the bodies hold {n} particles; "
                             f"set numerics.capacity >= {n}")
-    pool = mpm.make_pool(pl.particles, -(-capacity // devices) * devices)
+    pool = mpm.make_pool(pl.particles, xla.equal_parts(capacity, devices))
     gauges = np.asarray(sc.output.gauges, float).reshape(-1, d)
     body = pl.body
     mass = np.asarray(pool.mass)[:n]
