@@ -33,6 +33,7 @@ RELATIVE_MPM = 1e-12
 SCRIPT = textwrap.dedent('''
     import copy, json, pathlib, re, sys, tomllib
     from importlib.resources import files
+    import h5py
     import jax
     import numpy as np
     from blastfsi import method as methods, simulation
@@ -201,6 +202,43 @@ SCRIPT = textwrap.dedent('''
                                              {"x": np.asarray(again.state.mpm.particles.x)}),
                              "steps": [whole.summary["steps"], again.summary["steps"]]}
 
+    # snapshots written on 2 devices against 1: the same files, datasets, shapes and dtypes (the layout), the
+    # same XDMF text, values to round-off; a grid (sedov-2d) and particles (taylor-bar)
+    def snapshot_files(folder):
+        return sorted(p.relative_to(folder).as_posix() for p in (folder / "fields").rglob("*") if p.is_file())
+
+    def datasets(path):
+        found = {}
+        with h5py.File(path, "r") as f:
+            f.visititems(lambda name, obj: found.__setitem__(name, np.asarray(obj)) if isinstance(obj, h5py.Dataset)
+                         else None)
+        return found
+
+    for label, data in (("grid", cases["sedov-2d"][0]), ("particles", bar)):
+        data = copy.deepcopy(data)
+        data["output"]["fields"] = 3
+        folders = [pathlib.Path(sys.argv[1]) / f"layout_{label}_{n}" for n in (1, 2)]
+        for n, folder in zip((1, 2), folders):
+            simulation.run(with_devices(data, n), out=folder)
+        names = [snapshot_files(f) for f in folders]
+        entry = {"files": len(names[0]), "same_files": names[0] == names[1], "layout": [], "values": 0.0,
+                 "xdmf_same": True}
+        if names[0] == names[1]:
+            for name in names[0]:
+                a, b = (f / name for f in folders)
+                if name.endswith(".xdmf"):
+                    entry["xdmf_same"] &= a.read_text() == b.read_text()
+                    continue
+                da, db = datasets(a), datasets(b)
+                layout_a = {k: (v.shape, str(v.dtype)) for k, v in da.items()}
+                if layout_a != {k: (v.shape, str(v.dtype)) for k, v in db.items()}:
+                    entry["layout"].append(name)
+                    continue
+                floats = {k: v for k, v in da.items() if v.dtype.kind == "f"}
+                entry["values"] = max([entry["values"], *worst(floats, {k: db[k] for k in floats}).values()])
+                entry["datasets"] = entry.get("datasets", 0) + len(da)
+        report[f"layout/{label}"] = entry
+
     for label, n, cells in (("too_many", 16, 32), ("all_indivisible", "all", 36)):
         bad = with_devices(cases["sedov-2d"][0], n)
         bad["grid"]["cells"] = cells
@@ -272,6 +310,8 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
       steps later (measured: step 115 of that run, one particle emitted a step earlier), after which the runs
       differ by that discrete event, not by round-off; a cfdmp checkpoint written on 2 devices continues on 1
       (cfdmp-shock-tube);
+    * snapshots written on 2 devices are the one-device run's files (names, HDF5 datasets with their shapes
+      and dtypes, XDMF text) with values to round-off, for a grid (sedov-2d) and for particles (taylor-bar);
     * more devices than visible, and "all" not dividing the cells, are refused naming the key."""
     measured = _split_runs(tmp_path)
     assert measured["visible"] == 8
@@ -307,6 +347,11 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
     assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
     entry = measured["mpm_restart"]
     assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
+    for label in ("grid", "particles"):  # snapshots written on 2 devices: the one-device files, layout and values
+        entry = measured[f"layout/{label}"]
+        assert entry["files"] >= 4 and entry["same_files"] and entry["xdmf_same"], (label, entry)
+        assert not entry["layout"] and entry["datasets"] > 0, (label, entry)
+        assert entry["values"] <= RELATIVE_MPM, (label, entry)
     message = measured["too_many"]
     assert message is not None and "numerics.devices = 16" in message and "only 8 device(s) visible" in message
     message = measured["all_indivisible"]
