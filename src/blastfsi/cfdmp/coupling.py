@@ -609,7 +609,8 @@ def _cut(x, half, lo, hi, axis: int, side: int, axisymmetric: bool):
 
 def cut_at_coupled_faces(x, half, lo, hi, static: Static):
     """Gas particles straddling a coupled face, cut at it (:func:`_cut`): per particle (share of it beyond the
-    face, index of that face cell or -1, centre and half-size of the part inside (n, d)).
+    face, index of that face cell or -1, centre and half-size of the part inside (n, d), index of the face cell
+    whose face the part inside touches or -1).
 
     The share beyond leaves to the face cell's reservoir and the particle keeps the part inside. So the
     particles never overlap the ring cells beyond the face, which stand for that gas on the interface nodes
@@ -619,6 +620,7 @@ def cut_at_coupled_faces(x, half, lo, hi, static: Static):
     h = static.mpm.grid.cell_size
     share = jnp.zeros(x.shape[:1], x.dtype)
     face = jnp.full(x.shape[:1], -1, jnp.int32)
+    touching = jnp.full(x.shape[:1], -1, jnp.int32)
     first = 0
     for (axis, side, _plane), size in zip(static.faces, static.face_sizes):
         lateral = jnp.zeros(x.shape[:1], jnp.int32)
@@ -632,8 +634,10 @@ def cut_at_coupled_faces(x, half, lo, hi, static: Static):
         x, half = x.at[:, axis].set(centre), half.at[:, axis].set(l_in)
         face = jnp.where(phi > 0.0, first + lateral, face)
         share = 1.0 - (1.0 - share) * (1.0 - phi)  # (cut at two faces: a corner)
+        gap = (x[:, axis] - l_in - lo[axis]) if side == 0 else (hi[axis] - x[:, axis] - l_in)
+        touching = jnp.where(gap <= CUT_TOLERANCE * 2.0 * l_in, first + lateral, touching)
         first += size
-    return share, face, x, half
+    return share, face, x, half, touching
 
 
 def cut_at_outflow_faces(x, half, lo, hi, static: Static):
@@ -651,12 +655,32 @@ def cut_at_outflow_faces(x, half, lo, hi, static: Static):
     return share, x, half
 
 
+def _stalled(P: mpm.Particles, slot, touching, res: Reservoirs, candidates):
+    """Gas particles that still touch a coupled face (``touching``, :func:`cut_at_coupled_faces`) while an inflow
+    particle of their material grows at that face cell (:func:`feed`), and are not that inflow particle: gas
+    that entered earlier and has not left the layer the new gas enters. Where the flow stalls at the face (the
+    rarefied gas between a charge and a plate after the blast has passed), :func:`feed` would otherwise place
+    inflow particle after inflow particle over them, each with the bridge cell's density: steel-plate-blast
+    piled up to 420 particles in one face cell, whose volumes m / rho added up to 550 times the cell's, so
+    their pressure never rose to push them off the face and the pool grew from 17 000 to 32 000 particles.
+    :func:`remove_leaving` hands them whole to the face's reservoir, which :func:`feed` adds to the inflow
+    particle (compressed where the layer overfills)."""
+    n = res.buffer.shape[1]
+    cap = P.active.shape[0]
+    k = jnp.clip(slot, 0, n - 1)
+    f = jnp.clip(touching, 0, res.buffer.shape[0] - 1)
+    alive = (res.buffer >= 0) & P.active[jnp.clip(res.buffer, 0, cap - 1)]  # (F, n) inflow particles growing
+    own = jnp.arange(cap, dtype=res.buffer.dtype)
+    return candidates & (touching >= 0) & (slot >= 0) & alive[f, k] & (res.buffer[f, k] != own)
+
+
 def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: Static, layout: Layout):
     """Gas leaving the box. At a coupled face the part of a particle beyond it leaves
     (:func:`cut_at_coupled_faces`) with its share of the particle's mass, momentum and energy, which goes to
     the reservoir of the face cell (000 Eqs. 49-51; :func:`receive` settles it into the Eulerian cell); at a
     face on an outflow face of the domain the part beyond leaves the run (:func:`cut_at_outflow_faces`,
-    ``boundary_out``); the particle keeps the part inside and is deleted once wholly beyond. A gas particle
+    ``boundary_out``); the particle keeps the part inside and is deleted once wholly beyond. Gas stalled at a
+    coupled face (:func:`_stalled`) goes whole to the face's reservoir. A gas particle
     whose centre is still outside after the cuts (through a wall face) leaves the run whole. Structure
     fragments leave the run through any face (the grid holds no solid outside the box): their momentum and
     energy are booked in ``boundary_out``, their mass in ``structure_out``."""
@@ -668,7 +692,7 @@ def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: St
     x0, half0 = P.x[:, :d], P.half_size[:, :d]
     outside = P.active & jnp.any((x0 < lo) | (x0 > hi), axis=1)
     gas = P.active & (slot >= 0)
-    share, face, x1, half1 = cut_at_coupled_faces(x0, half0, lo, hi, static)
+    share, face, x1, half1, touching = cut_at_coupled_faces(x0, half0, lo, hi, static)
     to_euler = gas & (face >= 0) & (share > 0.0)
     x1, half1 = jnp.where(to_euler[:, None], x1, x0), jnp.where(to_euler[:, None], half1, half0)
     out_share, x2, half2 = cut_at_outflow_faces(x1, half1, lo, hi, static)
@@ -677,7 +701,9 @@ def remove_leaving(state: mpm.State, res: Reservoirs, budget: Budget, static: St
     fragment = outside & (slot < 0)
     gone = (gas & ~jnp.all((x2 >= lo) & (x2 <= hi), axis=1)) | fragment  # whole, out of the run
     to_euler, leaving = to_euler & ~gone, leaving & ~gone
-    to_reservoir = jnp.where(to_euler, share, 0.0)  # shares of each particle's content
+    stalled = _stalled(P, slot, touching, res, gas & ~gone & ~leaving)
+    to_euler, face = to_euler | stalled, jnp.where(stalled, touching, face)
+    to_reservoir = jnp.where(stalled, 1.0, jnp.where(to_euler, share, 0.0))  # shares of each particle's content
     to_boundary = jnp.where(gone, 1.0, jnp.where(leaving, (1.0 - to_reservoir) * out_share, 0.0))
     mass, mom, energy = particle_content(P)
     at = (jnp.where(to_euler, face, layout.face_out.shape[0]), jnp.clip(slot, 0, n - 1))  # (that index is dropped)
@@ -703,7 +729,8 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     Each face cell and material has one *inflow particle* that represents the gas entered through it since
     the last release: the layer next to the face, of thickness m / (rho A) (A the face's area), spanning the face cell
     (GIMP half-sizes: half the thickness normal to the face, h/2 along it), with the bridge cell's density
-    (:func:`cell_phases`), the mass-weighted velocity and the internal energy left by the total energy (Eq. 48
+    (:func:`cell_phases`; the density m / (A h) that fills the face cell where that is more), the mass-weighted
+    velocity and the internal energy left by the total energy (Eq. 48
     generalised: e = E/m - |v|^2/2; where that is negative, e = 0 and the deficit stays in the reservoir),
     stress -p I from its EOS. It is released to move with the MPM solution
     once it is as thick as a gas particle (h / ppc), and the next one starts at the face; so no gap opens
@@ -739,6 +766,9 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     deficit = jnp.where(fed, jnp.minimum(e, 0.0) * m, 0.0)
     e = jnp.maximum(e, 0.0)
     area = (layout.face_measure / h)[:, None]  # (h^(ndim-1) on Cartesian grids, the ring's 2 pi r h on r-z ones)
+    # more gas than the bridge cell's density fits into the face cell's layer (it is stalled at the face,
+    # :func:`_stalled`): the inflow particle is compressed to fill the cell, so its pressure rises
+    rho = jnp.maximum(rho, m / (area * h))
     thick = jnp.clip(m / (rho * area), 0.0, h)
     x = layout.face_centre[:, None, :] + layout.face_axis[:, None, :] * (0.5 * thick)[..., None]
     half = jnp.abs(layout.face_axis)[:, None, :] * (0.5 * thick)[..., None]
