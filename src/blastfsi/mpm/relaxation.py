@@ -28,8 +28,8 @@ relaxed each particle's own pressure to p*_I flattened the products' gradient wh
 shared their nodes. chi_I = clip((1 - max_k A_kI / sum_k A_kI) / MIXED, 0, 1) (one minus the largest
 material's share of the node's compliance) confines the exchange to nodes where the materials meet:
 single-gas runs are unchanged.
-s_I = min(1, MAX_VOLUME_CHANGE / (max_k |pbar_kI - p*_I| max_p 1/K_p), MAX_ENERGY_SHARE min over the node's
-particles p of material k with p*_I (pbar_kI - p*_I) > 0 of e_p rho_p K_p / (p*_I (pbar_kI - p*_I))) bounds
+s_I = min(1, MAX_VOLUME_CHANGE / (max_k |pbar_kI - p*_I| max_p 1/K_p), MAX_ENERGY_SHARE min_p e_p rho_p K_p / max_k
+p*_I (pbar_kI - p*_I) over the node's particles and the materials that give up energy there) bounds
 |dV_p| / V_p by MAX_VOLUME_CHANGE and the work a particle does, p*_I dV_p, by MAX_ENERGY_SHARE of its internal
 energy: a particle moves with its material's mismatch, not its own, so a cold particle among hotter ones of its
 material expands at a node where that material stands above p*, working at p*_I far above its own pressure
@@ -93,23 +93,21 @@ def relax(point: PointState, mass, material, wave_speed, idx, w, gas: tuple, num
     p_star = row_sum(b_I) / safe_a  # p*_I
     gap = jnp.where(has, p_mean - p_star[:, None], 0.0)
     chi = jnp.clip((1.0 - jnp.max(a_I, axis=1) / safe_a) / MIXED, 0.0, 1.0)
-    inverse_k = jnp.where((w > 0.0) & ok, 1.0 / safe_k, 0.0)
-    softest = jnp.zeros(num_nodes, p.dtype)
-    for row in range(idx.shape[0]):  # max_p 1 / K_p, one stencil node at a time (a particle pool split over
-        softest = softest.at[idx[row]].max(inverse_k[row])  # devices stays split; max is exact in any order)
+    # per node, max_p 1 / K_p (the volume bound) and min_p e_p rho_p K_p (the work bound: a particle of material k
+    # that expands at node I gives up p*_I dV_Ip <= s_I p*_I gap_kI m_p / (rho_p K_p), so s_I <= MAX_ENERGY_SHARE
+    # min_p e_p rho_p K_p / max_k p*_I gap_kI keeps the sum over its nodes, whose weights sum to 1, within
+    # MAX_ENERGY_SHARE of every particle's internal energy), one stencil row at a time (a particle pool split over
+    # devices stays split; max is exact in any order)
+    room = jnp.maximum(point.energy, 0.0) * point.density * safe_k
+    touches = (w > 0.0) & ok
+    rows = jnp.stack([jnp.where(touches, 1.0 / safe_k, 0.0), jnp.where(touches, -room, -jnp.inf)], axis=-1)
+    extremes = jnp.stack([jnp.zeros(num_nodes, p.dtype), jnp.full(num_nodes, -jnp.inf, p.dtype)], axis=-1)
+    for row in range(idx.shape[0]):
+        extremes = extremes.at[idx[row]].max(rows[row])
+    softest, least_room = extremes[:, 0], -extremes[:, 1]
     worst = jnp.max(jnp.abs(gap), axis=1) * softest
-    # the work bound: a particle of material k that expands at node I gives up p*_I dV_Ip <= s_I p*_I gap_kI m_p /
-    # (rho_p K_p); s_I <= MAX_ENERGY_SHARE min_p e_p rho_p K_p / (p*_I gap_kI) over the node's particles keeps the
-    # sum over its nodes (weights summing to 1) within MAX_ENERGY_SHARE of its internal energy
-    room = jnp.where(ok, jnp.maximum(point.energy, 0.0) * point.density * safe_k, jnp.inf)
-    loss = p_star[:, None] * gap  # > 0 where material k gives up energy at node I
-    limit = jnp.full(num_nodes, jnp.inf, p.dtype)
-    for j, k in enumerate(mine):
-        room_k = jnp.full(num_nodes, jnp.inf, p.dtype)
-        for row in range(idx.shape[0]):  # min_p over the node's particles of material k, one stencil row at a time
-            room_k = room_k.at[idx[row]].min(jnp.where((w[row] > 0.0) & k, room, jnp.inf))
-        limit = jnp.minimum(limit, jnp.where(loss[:, j] > 0.0, room_k / jnp.where(loss[:, j] > 0.0, loss[:, j], 1.0),
-                                             jnp.inf))
+    loss = jnp.max(p_star[:, None] * gap, axis=1)  # > 0 where some material gives up energy at node I
+    limit = jnp.where(loss > 0.0, least_room / jnp.where(loss > 0.0, loss, 1.0), jnp.inf)
     weight = chi * jnp.minimum(jnp.minimum(1.0, MAX_VOLUME_CHANGE / jnp.where(worst > 0.0, worst, 1.0)),
                                MAX_ENERGY_SHARE * limit)
     columns = interpolate(jnp.concatenate([weight[:, None] * gap, (weight * p_star)[:, None] * gap], axis=1))
