@@ -562,7 +562,7 @@ def test_outflow_mirror_is_one_way():
         np.testing.assert_allclose(f, min(1.0, phi / cp.FULL_FILL) * 1.0e5 * area[face, 0], rtol=1e-12)
 
 
-@pytest.mark.parametrize("shape", ["linear", "gimp"])
+@pytest.mark.parametrize("shape", [pytest.param("linear", marks=pytest.mark.slow), "gimp"])  # (gimp: the default)
 def test_structure_fragments_leave_through_a_flow_out_face(shape):
     """A steel block flying at 600 m/s out through the flow-out face the MPM box shares with the domain:
     its particles are deleted as they cross (before, the first one off the grid stopped the run as a

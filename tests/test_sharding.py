@@ -113,16 +113,71 @@ SCRIPT = textwrap.dedent('''
             out[f"cfdmp/{n}"] = entry
         return out
 
-    if sys.argv[2:] == ["slow"]:  # he-slab-2d to 12 steps after the coupling starts
-        print("REPORT" + json.dumps(cfdmp_split(example("he-slab-2d", **{"time.end": 1.62e-5, "output.fields": 0,
-                                                                         "output.plots": False}))))
+    report = {"visible": len(jax.devices())}
+    sedov = example("sedov-2d", **{"grid.cells": 32, "time.end": 0.1, "output.fields": 0, "output.plots": False,
+                                   "output.gauges": [[0.25, 0.0], [0.0, -0.3]]})
+    bar = example("taylor-bar", **{"time.end": 4e-6, "output.fields": 0, "output.plots": False})
+
+    if sys.argv[2:] == ["slow"]:
+        # he-slab-2d to 12 steps after the coupling starts
+        report["he-slab-2d"] = cfdmp_split(example("he-slab-2d", **{"time.end": 1.62e-5, "output.fields": 0,
+                                                                   "output.plots": False}))["cfdmp/2"]
+        # the same with the shock tube to 0.1 ms, and its checkpoint continued on another count
+        report.update(cfdmp_split(example("cfdmp-shock-tube", **{"time.end": 1e-4, "output.fields": 0,
+                                                                 "output.plots": False})))
+
+        # a cfdmp checkpoint written on 2 devices, continued on 1 (the shock tube's pool, 302 slots, divides into both)
+        out = pathlib.Path(sys.argv[1]) / "tube"
+        tube = example("cfdmp-shock-tube", **{"time.end": 2e-4, "output.fields": 0, "output.plots": False,
+                                              "output.checkpoint_interval": 1e-4})
+        whole = simulation.run(with_devices(tube, 2), out=out)
+        again = simulation.run(with_devices(tube, 1), out=out, restart=True)
+        report["cfdmp_restart"] = {"fields": worst({"U": np.asarray(whole.state.U), "x": np.asarray(whole.state.mpm.particles.x)},
+                                                   {"U": np.asarray(again.state.U), "x": np.asarray(again.state.mpm.particles.x)}),
+                                   "steps": [whole.summary["steps"], again.summary["steps"]]}
+
+        # snapshots written on 2 devices against 1: the same files, datasets, shapes and dtypes (the layout), the
+        # same XDMF text, values to round-off; a grid (sedov-2d) and particles (taylor-bar)
+        def snapshot_files(folder):
+            return sorted(p.relative_to(folder).as_posix() for p in (folder / "fields").rglob("*") if p.is_file())
+
+        def datasets(path):
+            found = {}
+            with h5py.File(path, "r") as f:
+                f.visititems(lambda name, obj: found.__setitem__(name, np.asarray(obj)) if isinstance(obj, h5py.Dataset)
+                             else None)
+            return found
+
+        for label, data in (("grid", sedov), ("particles", bar)):
+            data = copy.deepcopy(data)
+            data["output"]["fields"] = 3
+            folders = [pathlib.Path(sys.argv[1]) / f"layout_{label}_{n}" for n in (1, 2)]
+            for n, folder in zip((1, 2), folders):
+                simulation.run(with_devices(data, n), out=folder)
+            names = [snapshot_files(f) for f in folders]
+            entry = {"files": len(names[0]), "same_files": names[0] == names[1], "layout": [], "values": 0.0,
+                     "xdmf_same": True}
+            if names[0] == names[1]:
+                for name in names[0]:
+                    a, b = (f / name for f in folders)
+                    if name.endswith(".xdmf"):
+                        entry["xdmf_same"] &= a.read_text() == b.read_text()
+                        continue
+                    da, db = datasets(a), datasets(b)
+                    layout_a = {k: (v.shape, str(v.dtype)) for k, v in da.items()}
+                    if layout_a != {k: (v.shape, str(v.dtype)) for k, v in db.items()}:
+                        entry["layout"].append(name)
+                        continue
+                    floats = {k: v for k, v in da.items() if v.dtype.kind == "f"}
+                    entry["values"] = max([entry["values"], *worst(floats, {k: db[k] for k in floats}).values()])
+                    entry["datasets"] = entry.get("datasets", 0) + len(da)
+            report[f"layout/{label}"] = entry
+
+        print("REPORT" + json.dumps(report))
         sys.exit(0)
 
-    report = {"visible": len(jax.devices())}
     cases = {
-        "sedov-2d": (example("sedov-2d", **{"grid.cells": 32, "time.end": 0.1, "output.fields": 0,
-                                             "output.plots": False, "output.gauges": [[0.25, 0.0], [0.0, -0.3]]}),
-                     (1, 2, 8), 32 * 32, 32),
+        "sedov-2d": (sedov, (1, 2, 8), 32 * 32, 32),
         "sod": (example("sod", **{"grid.cells": 64, "output.fields": 0, "output.plots": False,
                                   "output.gauges": [0.3e-3, 0.75e-3]}), (1, 4), 64, 1),
         "sedov-3d": (example("sedov-3d", **{"grid.cells": 16, "time.end": 0.1, "output.fields": 0,
@@ -146,7 +201,6 @@ SCRIPT = textwrap.dedent('''
             report[f"{name}/{n}"] = entry
 
     # MPM: the particle pool split over 2 and 8 devices (8: a pool of 6001 slots rounded up to 6008)
-    bar = example("taylor-bar", **{"time.end": 4e-6, "output.fields": 0, "output.plots": False})
     ref = None
     for n, capacity in ((1, None), (2, None), (8, 6001)):
         data = with_devices(bar, n)
@@ -167,21 +221,6 @@ SCRIPT = textwrap.dedent('''
             entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
         report[f"mpm/{n}"] = entry
 
-    # cfdmp: the MPM region's pool split over 2 devices (the Eulerian grid whole on each), cfdmp-shock-tube to 0.1 ms
-    # (he-slab-2d, a 2D coupled run, in the slow test below)
-    report.update(cfdmp_split(example("cfdmp-shock-tube", **{"time.end": 1e-4, "output.fields": 0,
-                                                             "output.plots": False})))
-
-    # a cfdmp checkpoint written on 2 devices, continued on 1 (the shock tube's pool, 302 slots, divides into both)
-    out = pathlib.Path(sys.argv[1]) / "tube"
-    tube = example("cfdmp-shock-tube", **{"time.end": 2e-4, "output.fields": 0, "output.plots": False,
-                                          "output.checkpoint_interval": 1e-4})
-    whole = simulation.run(with_devices(tube, 2), out=out)
-    again = simulation.run(with_devices(tube, 1), out=out, restart=True)
-    report["cfdmp_restart"] = {"fields": worst({"U": np.asarray(whole.state.U), "x": np.asarray(whole.state.mpm.particles.x)},
-                                               {"U": np.asarray(again.state.U), "x": np.asarray(again.state.mpm.particles.x)}),
-                               "steps": [whole.summary["steps"], again.summary["steps"]]}
-
     # a checkpoint written on 2 devices, continued on 4 and on 1 (host arrays: the layout is the run's)
     out = pathlib.Path(sys.argv[1]) / "a"
     data = copy.deepcopy(cases["sedov-2d"][0])
@@ -201,43 +240,6 @@ SCRIPT = textwrap.dedent('''
     report["mpm_restart"] = {"fields": worst({"x": np.asarray(whole.state.mpm.particles.x)},
                                              {"x": np.asarray(again.state.mpm.particles.x)}),
                              "steps": [whole.summary["steps"], again.summary["steps"]]}
-
-    # snapshots written on 2 devices against 1: the same files, datasets, shapes and dtypes (the layout), the
-    # same XDMF text, values to round-off; a grid (sedov-2d) and particles (taylor-bar)
-    def snapshot_files(folder):
-        return sorted(p.relative_to(folder).as_posix() for p in (folder / "fields").rglob("*") if p.is_file())
-
-    def datasets(path):
-        found = {}
-        with h5py.File(path, "r") as f:
-            f.visititems(lambda name, obj: found.__setitem__(name, np.asarray(obj)) if isinstance(obj, h5py.Dataset)
-                         else None)
-        return found
-
-    for label, data in (("grid", cases["sedov-2d"][0]), ("particles", bar)):
-        data = copy.deepcopy(data)
-        data["output"]["fields"] = 3
-        folders = [pathlib.Path(sys.argv[1]) / f"layout_{label}_{n}" for n in (1, 2)]
-        for n, folder in zip((1, 2), folders):
-            simulation.run(with_devices(data, n), out=folder)
-        names = [snapshot_files(f) for f in folders]
-        entry = {"files": len(names[0]), "same_files": names[0] == names[1], "layout": [], "values": 0.0,
-                 "xdmf_same": True}
-        if names[0] == names[1]:
-            for name in names[0]:
-                a, b = (f / name for f in folders)
-                if name.endswith(".xdmf"):
-                    entry["xdmf_same"] &= a.read_text() == b.read_text()
-                    continue
-                da, db = datasets(a), datasets(b)
-                layout_a = {k: (v.shape, str(v.dtype)) for k, v in da.items()}
-                if layout_a != {k: (v.shape, str(v.dtype)) for k, v in db.items()}:
-                    entry["layout"].append(name)
-                    continue
-                floats = {k: v for k, v in da.items() if v.dtype.kind == "f"}
-                entry["values"] = max([entry["values"], *worst(floats, {k: db[k] for k in floats}).values()])
-                entry["datasets"] = entry.get("datasets", 0) + len(da)
-        report[f"layout/{label}"] = entry
 
     for label, n, cells in (("too_many", 16, 32), ("all_indivisible", "all", 36)):
         bad = with_devices(cases["sedov-2d"][0], n)
@@ -262,11 +264,31 @@ def _check_cfdmp_split(entry, gas_particles: int):
     assert all(size < entry["pool"] for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo
 
 
-@pytest.mark.slow
-def test_coupled_2d_split_on_two_virtual_devices(tmp_path):
-    """he-slab-2d (cfdmp, 2D) with the pool on 2 devices: the one-device run's particles and grid to round-off
-    12 steps after the coupling starts (see test_split_runs_on_eight_virtual_devices for why not further)."""
-    _check_cfdmp_split(_split_runs(tmp_path, "slow")["cfdmp/2"], gas_particles=20000)
+@pytest.mark.slow  # ~1 min alone, ~2 min beside another test worker on 2 cores
+def test_coupled_split_and_snapshots_on_two_virtual_devices(tmp_path):
+    """cfdmp with the MPM region's pool split over 2 devices, the Eulerian grid whole on each:
+
+    * he-slab-2d (2D) and cfdmp-shock-tube (1D, to 0.1 ms): the one-device run's particles and grid to round-off;
+      the compiled loop adds the nodal and per-cell sums across devices and gathers no pool-sized array
+      (particles are emitted into free slots ranked per device, mpm.add_particles_at: one cumsum over the pool
+      made the shock tube's loop all-gather its slot ranks). he-slab-2d is held to round-off for 12 steps after
+      the coupling starts, not further: the bridge compares sums with thresholds (a reservoir's mass against a
+      share of a particle's, coupling.feed), and the other order of the nodal sums flips one of them a few steps
+      later (measured: step 115 of that run, one particle emitted a step earlier), after which the runs differ
+      by that discrete event, not by round-off;
+    * a cfdmp checkpoint written on 2 devices continues on 1 (cfdmp-shock-tube);
+    * snapshots written on 2 devices are the one-device run's files (names, HDF5 datasets with their shapes
+      and dtypes, XDMF text) with values to round-off, for a grid (sedov-2d) and for particles (taylor-bar)."""
+    measured = _split_runs(tmp_path, "slow")
+    _check_cfdmp_split(measured["he-slab-2d"], gas_particles=20000)
+    _check_cfdmp_split(measured["cfdmp/2"], gas_particles=100)
+    entry = measured["cfdmp_restart"]
+    assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
+    for label in ("grid", "particles"):  # snapshots written on 2 devices: the one-device files, layout and values
+        entry = measured[f"layout/{label}"]
+        assert entry["files"] >= 4 and entry["same_files"] and entry["xdmf_same"], (label, entry)
+        assert not entry["layout"] and entry["datasets"] > 0, (label, entry)
+        assert entry["values"] <= RELATIVE_MPM, (label, entry)
 
 
 def _split_runs(folder, *args):
@@ -300,18 +322,7 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
       sums across devices (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
       a checkpoint written on 2 devices continues on 1;
     * 3D (sedov-3d, 16^3, 2 devices): the split grid gives the one-device run to round-off and exchanges halos;
-    * cfdmp (cfdmp-shock-tube to 0.1 ms here, he-slab-2d in the slow test): the MPM region's pool split over 2
-      devices, the Eulerian grid whole on each, gives the one-device run's particles and grid to round-off; the
-      compiled loop adds the nodal and per-cell sums across devices and gathers no pool-sized array (particles
-      are emitted into free slots ranked per device, mpm.add_particles_at: one cumsum over the pool made the
-      shock tube's loop all-gather its slot ranks). he-slab-2d is held to round-off for 12 steps after the
-      coupling starts, not further: the bridge compares sums with thresholds (a reservoir's mass against a
-      share of a particle's, coupling.feed), and the other order of the nodal sums flips one of them a few
-      steps later (measured: step 115 of that run, one particle emitted a step earlier), after which the runs
-      differ by that discrete event, not by round-off; a cfdmp checkpoint written on 2 devices continues on 1
-      (cfdmp-shock-tube);
-    * snapshots written on 2 devices are the one-device run's files (names, HDF5 datasets with their shapes
-      and dtypes, XDMF text) with values to round-off, for a grid (sedov-2d) and for particles (taylor-bar);
+    * cfdmp, and snapshots written on 2 devices: test_coupled_split_and_snapshots_on_two_virtual_devices (slow);
     * more devices than visible, and "all" not dividing the cells, are refused naming the key."""
     measured = _split_runs(tmp_path)
     assert measured["visible"] == 8
@@ -342,16 +353,8 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
     pool = measured["mpm/2"]["pool"]
     assert hlo["all-reduce"] and max(hlo["all-reduce"]) < pool, hlo  # the nodal sums, added across devices
     assert all(size < pool for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo  # particles stay put
-    _check_cfdmp_split(measured["cfdmp/2"], gas_particles=100)
-    entry = measured["cfdmp_restart"]
-    assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
     entry = measured["mpm_restart"]
     assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
-    for label in ("grid", "particles"):  # snapshots written on 2 devices: the one-device files, layout and values
-        entry = measured[f"layout/{label}"]
-        assert entry["files"] >= 4 and entry["same_files"] and entry["xdmf_same"], (label, entry)
-        assert not entry["layout"] and entry["datasets"] > 0, (label, entry)
-        assert entry["values"] <= RELATIVE_MPM, (label, entry)
     message = measured["too_many"]
     assert message is not None and "numerics.devices = 16" in message and "only 8 device(s) visible" in message
     message = measured["all_indivisible"]

@@ -83,7 +83,10 @@ def _maps(s: State) -> blast_maps.BlastMaps:
     return blast_maps.BlastMaps(s.peak, s.arrival, s.end, s.impulse, s.last)
 
 
-_conservative = jax.jit(ek.conservative, static_argnums=5)  # compiled once: params() runs for every snapshot
+# compiled once (params() runs for every snapshot); run eagerly, each would compile its every operation
+# (~60 small programs, ~3 s of a coupled run's start on a 2-core CPU)
+_conservative = jax.jit(ek.conservative, static_argnums=5)
+_stencil = jax.jit(mpm.stencil, static_argnums=(2, 3))
 
 
 @functools.partial(jax.jit, static_argnums=2)
@@ -191,8 +194,8 @@ class Cfdmp:
                              dtype=dtype)
         shape = mpm.SHAPES[c.shape_functions]
         if setup.ring_cells.size:
-            ridx, rw, rgrad = mpm.stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(setup.ring_half, dtype), grid,
-                                          shape)
+            ridx, rw, rgrad = _stencil(jnp.asarray(setup.ring_x, dtype), jnp.asarray(setup.ring_half, dtype), grid,
+                                       shape)
         else:  # MPM everywhere: no ring
             S = shape.nodes_per_dim ** nd
             ridx, rw, rgrad = jnp.zeros((S, 0), jnp.int32), jnp.zeros((S, 0), dtype), [jnp.zeros((S, 0), dtype)] * nd
@@ -263,7 +266,7 @@ class Cfdmp:
         budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32),
                            jnp.zeros((), dtype), jnp.zeros(d + 1, dtype), jnp.zeros(d + 1, dtype))
         zeros = jnp.zeros(n + d + 1, dtype)
-        maps = blast_maps.initial(self._pressure(U, prm, cs) - prm.reference_pressure)
+        maps = blast_maps.initial(jax.jit(self._pressure, static_argnums=2)(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
         clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
         clock["t"] = jnp.asarray(setup.euler.start_time, dtype)
