@@ -16,6 +16,12 @@ the test rig's clamp:
     python docs/figures/make_plate_table2.py run DIR [--cases 1 4] [--clamps fixed sliding] [--cells N] [--end T]
         [--recess DEPTH] [--box-lower Z]
     python docs/figures/make_plate_table2.py figures DIR    # plate_table2.json, plate_table2.png here; table
+    python docs/figures/make_plate_table2.py faces RESULTS  # plate_faces.json: the gas on the plate's two faces
+
+``faces`` reads the particle snapshots of a run written with its fields (``blastfsi run --example
+steel-plate-blast --out RESULTS``): at each snapshot, the overpressure of the gas particles within one cell of the
+plate's front and back faces, averaged per 5 mm ring of the free span and integrated over it (the net gas force on
+each face), and the density and overpressure of the back face's first layer near the axis (r < 50 mm).
 
 Each run is its own process (``one``) and writes ``DIR/case<k>-<clamp>[-c<cells>].json``: the centre's
 deflection history (the tracer at mid-thickness on the axis), its peak and when, the last value, the steps, the
@@ -36,6 +42,7 @@ import numpy as np
 HERE = Path(__file__).parent
 JSON = HERE / "plate_table2.json"
 PNG = HERE / "plate_table2.png"
+FACES_JSON = HERE / "plate_faces.json"
 
 CLAMPS = ("fixed", "sliding", "sliding-wide", "fixed-recess")
 BRIDGE_ROOM = 10  # cells of gas between the MPM box's lower face and the recess ring (the bridge needs 9: w + 4)
@@ -148,6 +155,52 @@ def cmd_figures(folder: Path) -> None:
     _figure(runs)
 
 
+def cmd_faces(results: Path, free_radius: float = 0.25, ring: float = 0.005, p0: float = 1.013e5) -> None:
+    import h5py
+
+    import tomllib
+
+    sc = tomllib.loads((results / "scenario.toml").read_text())
+    cell = (sc["domain"]["upper"][0] - sc["domain"]["lower"][0]) / sc["grid"]["cells"]
+    rows = []
+    for file in sorted((results / "fields").glob("member0_[0-9]*.h5")):
+        with h5py.File(file, "r") as f:
+            P = f["particles"]
+            x, p, rho = P["coordinates"][:], P["pressure"][:], P["density"][:]
+            steel, t = P["structure"][:] > 0, float(f.attrs["time"])
+        gas = ~steel
+        edges = np.arange(0.0, free_radius + ring / 2, ring)
+        k = np.clip(np.digitize(x[:, 0], edges) - 1, 0, edges.size - 2)
+        top, bottom = np.full(edges.size - 1, -np.inf), np.full(edges.size - 1, np.inf)
+        np.maximum.at(top, k[steel], x[steel, 1])
+        np.minimum.at(bottom, k[steel], x[steel, 1])
+        span = gas & (x[:, 0] < free_radius)
+        back = span & (x[:, 1] > top[k]) & (x[:, 1] < top[k] + cell)
+        front = span & (x[:, 1] < bottom[k]) & (x[:, 1] > bottom[k] - cell)
+        area = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+
+        def force(layer):  # sum over rings of the mean overpressure of the layer's particles in the ring x its area
+            total, count = np.zeros(area.size), np.zeros(area.size)
+            np.add.at(total, k[layer], p[layer] - p0)
+            np.add.at(count, k[layer], 1)
+            return float(np.sum(area * total / np.maximum(count, 1)))
+
+        axis = back & (x[:, 0] < 0.05)
+        rows.append({"time": t, "front_force": force(front), "back_force": force(back),
+                     "back_axis_density": float(rho[axis].mean()) if axis.any() else None,
+                     "back_axis_overpressure": float(p[axis].mean() - p0) if axis.any() else None})
+    FACES_JSON.write_text(json.dumps({"results": str(results), "rows": rows}, indent=1) + "\n")
+    print("| t [ms] | gas force on the front [kN] | on the back [kN] | back layer r < 50 mm: rho [kg/m^3], overpressure [MPa] |")
+    print("|---|---|---|---|")
+    for r in rows:
+        layer = "–" if r["back_axis_density"] is None else (f"{r['back_axis_density']:.2f}, "
+                                                            f"{r['back_axis_overpressure'] / 1e6:.2f}")
+        print(f"| {r['time'] * 1e3:.3f} | {r['front_force'] / 1e3:.1f} | {r['back_force'] / 1e3:.1f} | {layer} |")
+    t = np.asarray([r["time"] for r in rows])
+    print(f"impulse on the back to {t[-1] * 1e3:.2f} ms: "
+          f"{np.trapezoid([r['back_force'] for r in rows], t):.2f} N s")
+
+
 def _clamp_label(run: dict) -> str:
     """The clamp of a run, with the recess depth and a moved MPM box where they are set."""
     return (run["clamp"] + (f" ({run['recess'] * 1e3:.0f} mm)" if run.get("recess") else "")
@@ -163,19 +216,20 @@ def _figure(runs) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     colours = {}
     for r in sorted(runs, key=lambda r: (r["case"], r["clamp"], r["cells"] or 0)):
-        if r["cells"] is not None or r.get("box_lower") is not None or r.get("stopped"):
+        if r["cells"] is not None or r.get("box_lower") is not None:
             continue
         c = colours.setdefault(r["case"], f"C{len(colours)}")
+        stopped = f" (stopped at {r['end_time'] * 1e3:.2f} ms)" if r.get("stopped") else ""
         ax.plot(np.asarray(r["time"]) * 1e3, np.asarray(r["deflection"]) / r["thickness"], color=c,
                 ls={"sliding": "-", "fixed-recess": "-."}.get(r["clamp"], "--"),
-                label=f"case {r['case']}, {_clamp_label(r)} clamp")
+                label=f"case {r['case']}, {_clamp_label(r)} clamp{stopped}")
         exp = TABLE2[r["case"]][0]
         if exp is not None:
             ax.axhline(exp, color=c, lw=0.8, ls=":")
     ax.set_xlabel("time [ms]")
     ax.set_ylabel("centre deflection δ / t")
     ax.set_title("Table 2 plates: centre deflection (dotted: experiment)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper right")  # (the corner no history reaches)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(PNG, dpi=120)
@@ -202,11 +256,15 @@ def main(argv=None) -> int:
     run.add_argument("--box-lower", type=float, help="the MPM box's lower face z [m] (default: the example's)")
     fig = sub.add_parser("figures")
     fig.add_argument("dir", type=Path)
+    faces = sub.add_parser("faces")
+    faces.add_argument("results", type=Path)
     a = p.parse_args(argv)
     if a.cmd == "one":
         cmd_one(a.case, a.clamp, a.cells, a.dir, a.end, a.recess, a.box_lower)
     elif a.cmd == "run":
         cmd_run(a.dir, a.cases, a.clamps, a.cells, a.end, a.recess, a.box_lower)
+    elif a.cmd == "faces":
+        cmd_faces(a.results)
     else:
         cmd_figures(a.dir)
     return 0
