@@ -155,13 +155,18 @@ def cmd_figures(folder: Path) -> None:
     _figure(runs)
 
 
-def cmd_faces(results: Path, free_radius: float = 0.25, ring: float = 0.005, p0: float = 1.013e5) -> None:
+def cmd_faces(results: Path, ring: float = 0.005) -> None:
+    import tomllib
+
     import h5py
 
-    import tomllib
+    from blastfsi.materials import lookup
 
     sc = tomllib.loads((results / "scenario.toml").read_text())
     cell = (sc["domain"]["upper"][0] - sc["domain"]["lower"][0]) / sc["grid"]["cells"]
+    free_radius = sc["structures"][0]["supports"][0]["lower"][0]  # D / 2: the clamp's inner edge
+    air = lookup("air")
+    p0 = (air.gamma - 1.0) * air.density * air.specific_energy  # the ambient air's pressure (the run's)
     rows = []
     for file in sorted((results / "fields").glob("member0_[0-9]*.h5")):
         with h5py.File(file, "r") as f:

@@ -89,6 +89,14 @@ _conservative = jax.jit(ek.conservative, static_argnums=5)
 _stencil = jax.jit(mpm.stencil, static_argnums=(2, 3))
 
 
+def _grid_pressure(U, prm: Params, cs: cp.Static):
+    """The pressure of every cell of U, on the grid's shape."""
+    return cp.flat_primitives(U, prm.euler.eos, cs.euler)["pressure"].reshape(cs.euler.shape)
+
+
+_grid_pressure_compiled = jax.jit(_grid_pressure, static_argnums=2)  # (the initial state's, outside the loop)
+
+
 @functools.partial(jax.jit, static_argnums=2)
 def _viewed_primitives(st: State, prm: Params, cs: cp.Static):
     """(primitives of the viewed grid, cells without gas, positive-phase duration) for a snapshot: one
@@ -266,7 +274,7 @@ class Cfdmp:
         budget = cp.Budget(jnp.zeros(n + d + 1, dtype), jnp.zeros(d + 1, dtype), jnp.zeros((), jnp.int32),
                            jnp.zeros((), dtype), jnp.zeros(d + 1, dtype), jnp.zeros(d + 1, dtype))
         zeros = jnp.zeros(n + d + 1, dtype)
-        maps = blast_maps.initial(jax.jit(self._pressure, static_argnums=2)(U, prm, cs) - prm.reference_pressure)
+        maps = blast_maps.initial(_grid_pressure_compiled(U, prm, cs) - prm.reference_pressure)
         n_cols = len(self.history_columns(setup, sc))
         clock = timeloop.clock(n_samples, n_cols, dtype)  # a charge's clock starts at its remap time
         clock["t"] = jnp.asarray(setup.euler.start_time, dtype)
@@ -275,10 +283,6 @@ class Cfdmp:
         if setup.coupling.activation_overpressure == 0.0:
             state = jax.jit(_activate, static_argnums=2)(state, prm, cs)
         return state
-
-    @staticmethod
-    def _pressure(U, prm: Params, cs: cp.Static):
-        return cp.flat_primitives(U, prm.euler.eos, cs.euler)["pressure"].reshape(cs.euler.shape)
 
     def advance(self, state, params: Params, static: Static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         cs = static.coupling
@@ -335,7 +339,7 @@ class Cfdmp:
 
         def step(s, dt):
             new, viewed = jax.lax.cond(s.coupled, coupled if cs.faces else mpm_only, euler_only, s, dt)
-            dp = self._pressure(viewed, params, cs) - params.reference_pressure
+            dp = _grid_pressure(viewed, params, cs) - params.reference_pressure
             new = placed(new, static.devices)
             return new._replace(**blast_maps.update(_maps(new), dp, s.t, dt, params.arrival_threshold)._asdict())
 
