@@ -664,7 +664,9 @@ def _stalled(P: mpm.Particles, slot, touching, res: Reservoirs, candidates):
     piled up to 420 particles in one face cell, whose volumes m / rho added up to 550 times the cell's, so
     their pressure never rose to push them off the face and the pool grew from 17 000 to 32 000 particles.
     :func:`remove_leaving` hands them whole to the face's reservoir, which :func:`feed` adds to the inflow
-    particle (compressed where the layer overfills)."""
+    particle (compressed where the layer overfills). None stall without a coupled face (MPM everywhere)."""
+    if res.buffer.shape[0] == 0:
+        return jnp.zeros_like(candidates)
     n = res.buffer.shape[1]
     cap = P.active.shape[0]
     k = jnp.clip(slot, 0, n - 1)
