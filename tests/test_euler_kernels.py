@@ -33,7 +33,7 @@ def params(*rows, cfl=0.5):
 @functools.partial(jax.jit, static_argnums=(3,))
 def advance(U, prm, n_steps, cfg):
     """n_steps (traced) steps at the stable time step."""
-    return jax.lax.fori_loop(0, n_steps, lambda i, V: euler.step(V, stable_dt(V, prm, cfg), prm, cfg), U)
+    return jax.lax.fori_loop(0, n_steps, lambda i, V: euler.step(V, stable_dt(V, prm, cfg), prm, cfg, parity=i), U)
 
 
 conservative = jax.jit(euler.conservative, static_argnums=5)

@@ -35,7 +35,7 @@ def params(*rows, cfl=0.5, dtype=jnp.float64):
 
 @functools.partial(jax.jit, static_argnums=(4,))
 def run_fixed(U, prm, dt, n_steps, cfg):
-    return jax.lax.fori_loop(0, n_steps, lambda i, V: euler.step(V, dt, prm, cfg), U)
+    return jax.lax.fori_loop(0, n_steps, lambda i, V: euler.step(V, dt, prm, cfg, parity=i), U)
 
 
 def centres(cfg):

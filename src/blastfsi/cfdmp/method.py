@@ -299,7 +299,7 @@ class Cfdmp:
 
         # each branch returns the new state and the viewed grid (blast maps), one gas P2G per step
         def euler_only(s, dt):
-            s = s._replace(U=ek.step(s.U, dt, params.euler, cfg, s.t))
+            s = s._replace(U=ek.step(s.U, dt, params.euler, cfg, s.t, parity=s.step))
             dp = cp.flat_primitives(s.U, params.euler.eos, cfg)["pressure"][lay.ring_cells] - params.reference_pressure
             hot = jnp.max(dp, initial=-jnp.inf) > params.activation  # (no ring cells: MPM everywhere)
             s = jax.lax.cond(hot, lambda s: _activate(s, params, cs), lambda s: s, s)
@@ -327,7 +327,7 @@ class Cfdmp:
             eos = params.euler.eos
             prim = cp.flat_primitives(s.U, eos, cfg)
             ms, budget = mpm_step(s, dt, cp.interface_source(prim, lay, cs, pref))
-            U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg)
+            U, T = ek.step_with_transfers(s.U, dt, params.euler, cfg, parity=s.step)
             U, budget = _blast_inflow(U, ek.with_blast(U, s.t, dt, params.euler, cfg), budget, lay, cs)
             ms, res, budget = cp.remove_leaving(ms, s.reservoirs, budget, cs, lay)
             U, res, budget = cp.receive(U, res, budget, T, prim, eos, cs, lay)

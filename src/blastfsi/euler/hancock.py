@@ -28,11 +28,12 @@ One directional operator L_a(tau) (:func:`sweep`), per cell i along axis a:
    radial pressure force and the products fraction's alpha div u term of hllc.flux_divergence, both
    at the cell's mid-step state w_i + delta_i (time-centred: second order in radial geometry).
 
-Full step (Strang, Toro 2009 Ch. 16), as Lax-Wendroff's: U^{n+1} = L_z L_y L_x L_x L_y L_z U^n, each
-operator with dt/2 (applied right to left; in 1D two x operators of dt/2), with the time step of
-Lax-Wendroff, dt = cfl dx / max_d max_cells (|u_d| + c): each operator runs at Courant number <= cfl/2.
-One flux evaluation per operator: 2 ndim per step, as hllc-muscl's two stages of ndim axes, on a step
-ndim times longer.
+Full step: the alternating splitting of splitting.py, U^{n+1} = L_z L_y L_x U^n on even steps and
+L_x L_y L_z U^n on odd ones (applied right to left), each operator with the whole dt: second order over
+each pair of steps, whose product is the symmetric (Strang) splitting of the double step (Toro 2009
+Sec. 16.4). The time step is Lax-Wendroff's, dt = cfl dx / max_d max_cells (|u_d| + c), so each operator
+runs at Courant number <= cfl (MUSCL-Hancock's linear limit: 1). One flux evaluation per operator: ndim
+per step, half of hllc-muscl's two stages of ndim axes, on a step ndim times longer.
 
 Face transfers (for conservative coupling): the amount of a row moved across face i+1/2 from cell i
 to cell i+1 by one operator is T = tau/dx F_{i+1/2}; the radial momentum's pressure force and the
@@ -117,8 +118,9 @@ def sweep(rows, tau, eos_r, cfg: Config, lay, axis: int, record: bool = False):
     return (new, tuple(lam * f for f in flux)) if record else new
 
 
-def step(U, dt, eos_r, cfg: Config, lay, moved=None):
-    """L_z L_y L_x L_x L_y L_z, each operator with dt/2 (module docstring), the order of lax_wendroff.step; the
-    operators and the transfers (moved) as in :func:`blastfsi.euler.splitting.split_step`."""
-    return split_step(U, lambda _, rows, a, record: sweep(rows, 0.5 * dt, eos_r, cfg, lay, a, record=record), (),
-                      cfg, moved)
+def step(U, dt, eos_r, cfg: Config, lay, moved=None, parity=0):
+    """L_z L_y L_x (even ``parity``) or L_x L_y L_z (odd), each operator with dt (module docstring): a run
+    passes its step's index (its parity alternates the order); the operators and the transfers (moved) as
+    in :func:`blastfsi.euler.splitting.split_step`."""
+    return split_step(U, lambda _, rows, a, record: sweep(rows, dt, eos_r, cfg, lay, a, record=record), (),
+                      cfg, moved, parity)

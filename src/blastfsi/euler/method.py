@@ -135,7 +135,7 @@ class Euler:
             return kernels.stable_dt(s.U, params.kernel, cfg)
 
         def step(s, dt):
-            U = kernels.step(s.U, dt, params.kernel, cfg, s.t)
+            U = kernels.step(s.U, dt, params.kernel, cfg, s.t, parity=s.step)
             dp = _pressure(U, params, cfg) - params.reference_pressure
             maps = blast_maps.update(_maps(s), dp, s.t, dt, params.arrival_threshold)
             return placed(s._replace(U=U, **maps._asdict()), cfg)

@@ -1,7 +1,12 @@
-"""The symmetric dimensional splitting shared by the split schemes (lax_wendroff.py, hancock.py).
+"""The dimensional splittings of the split schemes (lax_wendroff.py, hancock.py); each directional operator L_a
+is one call of the scheme's sweep.
 
-U^{n+1} = L_z L_y L_x L_x L_y L_z U^n, each directional operator L_a one call of the scheme's sweep with its
-half step (000 Eq. (6) with ERRATA 000-4; Strang, Toro 2009 Ch. 16).
+* symmetric (Lax-Wendroff, 000 Eq. (6) with ERRATA 000-4): U^{n+1} = L_z L_y L_x L_x L_y L_z U^n, each operator
+  with dt/2: second order within every step, 2 ndim operators per step;
+* alternating (HLLC-Hancock): U^{n+1} = L_z L_y L_x U^n on even steps and L_x L_y L_z U^n on odd ones, each
+  operator with the whole dt: ndim operators per step, second order over each pair of steps, whose product
+  L_x L_y L_z L_z L_y L_x is the symmetric splitting of a double step (Strang 1968; Toro 2009 Sec. 16.4;
+  LeVeque 2002 Sec. 19.5).
 """
 from __future__ import annotations
 
@@ -13,8 +18,10 @@ from blastfsi.euler.config import Config
 from blastfsi.xla import fori
 
 
-def split_step(U, sweep, consts: tuple, cfg: Config, moved=None):
-    """The 2 ndim operators (applied right to left; in 1D two x operators) on U (nvar, *shape).
+def split_step(U, sweep, consts: tuple, cfg: Config, moved=None, parity=None):
+    """The 2 ndim operators of the symmetric splitting (applied right to left; in 1D two x operators) on U
+    (nvar, *shape); with ``parity`` (0 or 1, may be traced: the step's index modulo 2) the ndim operators of
+    the alternating splitting, x first on even steps (module docstring).
 
     ``sweep(consts, rows, axis, record)``: one operator along ``axis`` on a tuple of conservative rows (of a
     block spanning the axis, with ``consts`` cut to the same block), returning the new rows, and with
@@ -26,7 +33,7 @@ def split_step(U, sweep, consts: tuple, cfg: Config, moved=None):
     transfers.
     """
     ndim = len(cfg.shape)
-    order = tuple(reversed(range(ndim))) + tuple(range(ndim))
+    forward, backward = tuple(range(ndim)), tuple(reversed(range(ndim)))
     rows = tuple(U)
     nvar = len(rows)
 
@@ -46,10 +53,17 @@ def split_step(U, sweep, consts: tuple, cfg: Config, moved=None):
 
     branches = [body(a) for a in range(ndim)]
 
+    if parity is None:
+        order, count = backward + forward, 2 * ndim
+    # (an ensemble's members carry their own step counters: under vmap the parity is batched and each operator
+    # evaluates every axis's sweep and selects one, the cost of the symmetric splitting)
+    else:  # the axis of operator i: row `parity` of the two orders
+        order, count = jnp.asarray([forward, backward])[jnp.asarray(parity) % 2], ndim
+
     def operator(i, state):  # i traced in a loop, a Python int where the loop is unrolled (fori)
-        if isinstance(i, int):
+        if isinstance(i, int) and isinstance(order, tuple):
             return branches[order[i]](state)
         return jax.lax.switch(jnp.asarray(order)[i], branches, state)
 
-    state = fori(2 * ndim, operator, rows if moved is None else (rows, tuple(moved)))
+    state = fori(count, operator, rows if moved is None else (rows, tuple(moved)))
     return jnp.stack(state) if moved is None else (jnp.stack(state[0]), state[1])

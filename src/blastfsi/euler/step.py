@@ -89,12 +89,12 @@ def stable_dt(U, params: Params, cfg: Config, owned=None):
     through its reconstruction) do not set it. The fault check covers every cell.
 
     Split schemes (Lax-Wendroff, HLLC-Hancock): dt = cfl dx / max over cells and axes of (|u_d| + c);
-    each directional operator then runs at Courant number <= cfl/2 (dt/2 each), so the linear limit
-    is cfl = 2. HLLC-MUSCL (unsplit): dt = cfl dx / max over cells of sum_d (|u_d| + c), linear limit
+    Lax-Wendroff's directional operators then run at Courant number <= cfl/2 (dt/2 each), so its linear
+    limit is cfl = 2; HLLC-Hancock's at <= cfl (dt each, alternating), linear limit 1. HLLC-MUSCL (unsplit): dt = cfl dx / max over cells of sum_d (|u_d| + c), linear limit
     cfl = 1. Measured (Sod 200 cells; 2D blasts of pressure ratio 10 and 1e5, 48^2 walls, 200 steps):
     LW runs up to cfl 1.8 in 1D and 1.5 in 2D (NaN at 1.95 / 1.8); HLLC-MUSCL up to 1.0 (1.1 in
-    1D); HLLC-Hancock up to 2.2 in both (a non-physical cell in 2D at 2.4), and the sedov-2d example
-    (ambient pressure 1e-6 of the blast's) at 1.8 and 2.0; HLLC-MUSCL the sedov-2d example at its cap
+    1D); HLLC-Hancock up to 1.2 (the highest tried) on 2D blasts, and the sod and sedov-2d examples
+    (sedov-2d: ambient pressure 1e-6 of the blast's) at 1.1; HLLC-MUSCL the sedov-2d example at its cap
     1.0. The scenario's caps per scheme: blastfsi.euler.scenario.CFL_MAX. cfl <= 0.5 keeps margin for the
     positivity of HLLC-MUSCL near strong blasts.
     """
@@ -122,15 +122,20 @@ def first_bad_cell(U, params: Params, cfg: Config):
     return jnp.where(jnp.any(flat), jnp.argmax(flat), -1)
 
 
-def _kernel(cfg: Config):
-    return {LAX_WENDROFF: lax_wendroff.step, HLLC_MUSCL: hllc.step, HLLC_HANCOCK: hancock.step}[cfg.scheme]
+def _kernel(cfg: Config, parity):
+    """The scheme's step (U, dt, eos_r, cfg, lay, moved); HLLC-Hancock's alternates its sweeps by ``parity``."""
+    if cfg.scheme == HLLC_HANCOCK:
+        return functools.partial(hancock.step, parity=parity)
+    return {LAX_WENDROFF: lax_wendroff.step, HLLC_MUSCL: hllc.step}[cfg.scheme]
 
 
-def step(U, dt, params: Params, cfg: Config, t=None):
+def step(U, dt, params: Params, cfg: Config, t=None, parity=0):
     """One full time step of length dt from time t with the scheme of cfg.scheme; with a blast table
-    (``params.blast``) its layer is then set at t + dt (:func:`with_blast`)."""
+    (``params.blast``) its layer is then set at t + dt (:func:`with_blast`). ``parity``: the step's index
+    (modulo 2, may be traced), which alternates HLLC-Hancock's sweep order (hancock.py); a loop of steps
+    passes its counter, or that scheme is first order in time."""
     lay, eos_r = _setup(U, params, cfg)
-    return with_blast(_kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay), t, dt, params, cfg)
+    return with_blast(_kernel(cfg, parity)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay), t, dt, params, cfg)
 
 
 @functools.partial(jax.jit, static_argnums=(3,))
@@ -139,10 +144,10 @@ def advance_to(U, params: Params, t_end, cfg: Config):
     onto t_end), in one compiled loop: the kernels' own time loop, without output (the runs' loop, with
     output, gauges and faults, is :func:`blastfsi.timeloop.run_until`)."""
     def body(state):
-        V, t = state
+        V, t, k = state
         dt = jnp.minimum(stable_dt(V, params, cfg), t_end - t)
-        return step(V, dt, params, cfg), t + dt
-    return jax.lax.while_loop(lambda s: s[1] < t_end, body, (U, jnp.zeros((), U.dtype)))[0]
+        return step(V, dt, params, cfg, parity=k), t + dt, k + 1
+    return jax.lax.while_loop(lambda s: s[1] < t_end, body, (U, jnp.zeros((), U.dtype), jnp.zeros((), jnp.int32)))[0]
 
 
 def with_blast(U, t, dt, params: Params, cfg: Config):
@@ -160,9 +165,10 @@ def face_shape(cfg: Config, axis: int) -> tuple:
     return tuple(m + (d == axis) for d, m in enumerate(cfg.shape))
 
 
-def step_with_transfers(U, dt, params: Params, cfg: Config):
+def step_with_transfers(U, dt, params: Params, cfg: Config, parity=0):
     """(U_new, transfers): U_new as step(U, dt, params, cfg) gives it without the blast layer (apply
-    :func:`with_blast` after it, booking its change as inflow) and the amounts each face passed.
+    :func:`with_blast` after it, booking its change as inflow) and the amounts each face passed
+    (``parity`` as in :func:`step`).
 
     transfers: one array per axis a, of shape (nvar, *face_shape(cfg, a)). T[r, ..., f, ...] is the
     amount of row r moved across face f of axis a (between cells f-1 and f) from the low to the
@@ -187,7 +193,7 @@ def step_with_transfers(U, dt, params: Params, cfg: Config):
     """
     lay, eos_r = _setup(U, params, cfg)
     zeros = tuple((jnp.zeros(face_shape(cfg, a), U.dtype),) * lay.nvar for a in range(lay.ndim))
-    U_new, moved = _kernel(cfg)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay, zeros)
+    U_new, moved = _kernel(cfg, parity)(U, jnp.asarray(dt, U.dtype), eos_r, cfg, lay, zeros)
     return U_new, tuple(jnp.stack(m) for m in moved)
 
 
