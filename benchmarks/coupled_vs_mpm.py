@@ -55,8 +55,9 @@ def _best(fn, arg, repeats=5) -> float:
     return best
 
 
-def parts(scheme: str) -> dict:
-    """Milliseconds of each part of the coupled step at PARTS_AT, and of whole steps (20, through advance)."""
+def parts(scheme: str, example: str = "he-slab-2d", at: float = PARTS_AT) -> dict:
+    """Milliseconds of each part of the coupled step of ``example`` at time ``at``, and of whole steps (20,
+    through advance)."""
     import jax
     import jax.numpy as jnp
 
@@ -67,7 +68,7 @@ def parts(scheme: str) -> dict:
     from blastfsi.scenario import expand
 
     jax.config.update("jax_enable_x64", True)
-    sc, _, scs = expand(load("he-slab-2d", set={"output.history_samples": 401, "numerics.scheme": scheme}))
+    sc, _, scs = expand(load(example, set={"output.history_samples": 401, "numerics.scheme": scheme}))
     method = methods.get(sc.method)
     setup = method.build(scs[0])
     static = method.static(setup, scs[0])
@@ -76,8 +77,8 @@ def parts(scheme: str) -> dict:
     params = simulation._stack([method.params(setup, jnp.float64)], "params")
     interval = (sc.time.end - float(state.t[0])) / (n - 1)
     floor = sc.time.dt_min_fraction
-    advance, _ = methods.compiled_advance(method, static, state, params, PARTS_AT, 20_000, interval, floor)
-    state = jax.block_until_ready(advance(state, params, PARTS_AT, 20_000, interval, floor))
+    advance, _ = methods.compiled_advance(method, static, state, params, at, 50_000, interval, floor)
+    state = jax.block_until_ready(advance(state, params, at, 50_000, interval, floor))
     twenty, _ = methods.compiled_advance(method, static, state, params, 1.0, 20, interval, floor)
     whole = _best(lambda st: twenty(jax.tree_util.tree_map(jnp.copy, st), params, 1.0, 20, interval, floor),
                   state, 3) / 20

@@ -684,15 +684,15 @@ def test_gas_stalled_at_a_coupled_face_joins_the_inflow_particle():
 
 
 def test_mpm_everywhere_gas_at_rest_stays_at_rest():
-    """The MPM box is the whole domain (he-slab-2d-mpm's layout: no coupled face, every face a flow-out
-    face): the gas becomes particles at the start and, at rest, stays at rest to round-off; the budget
-    closes. (The stalled-gas rule of remove_leaving once failed to compile here: with no coupled face it
-    indexed an empty reservoir table.)"""
+    """The MPM box is the whole domain (he-slab-2d-mpm's layout, here in 1D: no coupled face, every face a
+    flow-out face): the gas becomes particles at the start and, at rest, stays at rest to round-off; the
+    budget closes. (The stalled-gas rule of remove_leaving once failed to compile here: with no coupled face
+    it indexed an empty reservoir table; he-slab-2d-mpm did not compile.)"""
     state = {"material": "air", "density": 1.2, "pressure": 1.0e5}
-    d = {"method": "cfdmp", "name": "rest-mpm-everywhere", "domain": {"lower": [0.0, 0.0], "upper": [0.03, 0.03]},
-         "boundaries": {"x": ["outflow", "outflow"], "y": ["outflow", "outflow"]}, "grid": {"cells": 15},
+    d = {"method": "cfdmp", "name": "rest-mpm-everywhere", "domain": {"lower": [0.0], "upper": [0.03]},
+         "boundaries": {"x": ["outflow", "outflow"]}, "grid": {"cells": 30},
          "initial": {"kind": "riemann", "diaphragm": 0.01, "left": state, "right": state},
-         "mpm_region": {"lower": [0.0, 0.0], "upper": [0.03, 0.03], "activation_overpressure": 0.0},
+         "mpm_region": {"lower": [0.0], "upper": [0.03], "activation_overpressure": 0.0},
          "time": {"end": 5.0e-5}, "output": {"history_samples": 6, "fields": 0, "plots": False}}
     res = blastfsi.run(d)
     assert res.summary["steps"] > 10
