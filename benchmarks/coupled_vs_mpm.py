@@ -69,13 +69,8 @@ def parts(scheme: str, example: str = "he-slab-2d", at: float = PARTS_AT) -> dic
 
     jax.config.update("jax_enable_x64", True)
     sc, _, scs = expand(load(example, set={"output.history_samples": 401, "numerics.scheme": scheme}))
-    method = methods.get(sc.method)
-    setup = method.build(scs[0])
-    static = method.static(setup, scs[0])
-    n = sc.output.history_samples
-    state = simulation._stack([method.initial_state(setup, scs[0], n, jnp.float64)], "state")
-    params = simulation._stack([method.params(setup, jnp.float64)], "params")
-    interval = (sc.time.end - float(state.t[0])) / (n - 1)
+    method, _, static, state, params = simulation.prepare(sc, scs)
+    interval = (sc.time.end - float(state.t[0])) / (sc.output.history_samples - 1)
     floor = sc.time.dt_min_fraction
     advance, _ = methods.compiled_advance(method, static, state, params, at, 50_000, interval, floor)
     state = jax.block_until_ready(advance(state, params, at, 50_000, interval, floor))

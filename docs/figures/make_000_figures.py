@@ -66,7 +66,6 @@ def _restored(folder: Path, name: str, time: float | None):
     last checkpoint at or before ``time``. (The driver's parts, called outside ``blastfsi.run``, which would set
     the run's precision: this process computes in float64.)"""
     import jax
-    import jax.numpy as jnp
 
     from blastfsi import api, method as methods, simulation
     from blastfsi.io import results
@@ -76,12 +75,8 @@ def _restored(folder: Path, name: str, time: float | None):
 
     example, overrides = RUNS[name]
     sc, _, scs = expand(api.load(example, set=overrides))
-    method = methods.get(sc.method)
-    setup = method.build(scs[0])
-    static = method.static(setup, scs[0])
+    method, (setup,), static, state, params = simulation.prepare(sc, scs)
     n = sc.output.history_samples
-    state = simulation._stack([method.initial_state(setup, scs[0], n, jnp.float64)], "state")
-    params = simulation._stack([method.params(setup, jnp.float64)], "params")
     begin = float(state.t[0])  # the clock's start, as the driver's: a charge's remap time
     if time is not None:
         _, ckpt_times, _ = simulation.stop_times(sc, begin)

@@ -271,30 +271,39 @@ def _written_here(out: Path | None):
         yield Path(scratch) / "results"
 
 
-def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path | None, out: Path | None, *,
-         overwrite: bool, bar: _Progress, restart: bool, chunk_steps: int) -> Result:
-    """:func:`run` of the validated scenario ``sc`` (its members' overrides and scenarios), in its precision;
-    ``source``: the results directory of the run (read on restart), ``out``: where this process writes it
-    (:func:`_written_here`)."""
+def prepare(sc: ScenarioBase, member_scs: list, stage=lambda message: None):
+    """(method, setups, static, state, params) of a validated scenario (:func:`blastfsi.scenario.expand`): the
+    members' set-ups, the static configuration they share, and their initial states and parameters stacked
+    along a leading member axis, in ``numerics.precision`` (the arrays :func:`blastfsi.method.compiled_advance`
+    takes). What :func:`run` starts from; for studies of the time loop outside a run (a step's cost, its
+    parts). ``stage``: called with a line per set-up built (the progress display)."""
     method = methods.get(sc.method)
     setups = []
     for k, s in enumerate(member_scs):
         n = len(member_scs)
         if n == 1 or k % max(n // 10, 1) == 0 or k == n - 1:
-            bar.stage(f"building the {sc.method} set-up" + (f": member {k + 1} of {n}" if n > 1 else ""))
+            stage(f"building the {sc.method} set-up" + (f": member {k + 1} of {n}" if n > 1 else ""))
         setups.append(method.build(s))
     dtype = jnp.float64 if sc.numerics.precision == "float64" else jnp.float32
     statics = {method.static(setup, s) for setup, s in zip(setups, member_scs)}
     if len(statics) != 1:
         raise ScenarioError(f"all ensemble members must share the static configuration compiled into the time loop; "
                             f"got {sorted(map(repr, statics))}")
-    static = statics.pop()
     n_samples = sc.output.history_samples
     state = _stack([method.initial_state(setup, s, n_samples, dtype) for setup, s in zip(setups, member_scs)], "state")
     methods.check_state(state)
-    begin = float(np.min(np.asarray(state.t)))  # the clock's start: 0, or a charge's remap time
-    sample_interval = (sc.time.end - begin) / (n_samples - 1)
     params = _stack([method.params(setup, dtype) for setup in setups], "params")
+    return method, setups, statics.pop(), state, params
+
+
+def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path | None, out: Path | None, *,
+         overwrite: bool, bar: _Progress, restart: bool, chunk_steps: int) -> Result:
+    """:func:`run` of the validated scenario ``sc`` (its members' overrides and scenarios), in its precision;
+    ``source``: the results directory of the run (read on restart), ``out``: where this process writes it
+    (:func:`_written_here`)."""
+    method, setups, static, state, params = prepare(sc, member_scs, bar.stage)
+    begin = float(np.min(np.asarray(state.t)))  # the clock's start: 0, or a charge's remap time
+    sample_interval = (sc.time.end - begin) / (sc.output.history_samples - 1)
     field_times, ckpt_times, stops = stop_times(sc, begin)
 
     last_ckpt = None
