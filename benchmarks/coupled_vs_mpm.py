@@ -37,8 +37,8 @@ def loops(names) -> dict:
         example, overrides = RUNS[name]
         started = time.perf_counter()
         s = blastfsi.run(example, set={**COMMON, **overrides}).summary
-        out[name] = {"example": example, "set": overrides, "steps": s["steps"], "compile_s": round(s["compile_time"], 2),
-                     "loop_s": round(s["loop_time"], 2), "run_call_s": round(time.perf_counter() - started, 2),
+        out[name] = {"example": example, "set": overrides, "steps": s["steps"],
+                     "compile_s": round(s["compile_time"], 2), "loop_s": round(s["loop_time"], 2), "run_call_s": round(time.perf_counter() - started, 2),
                      "ms_per_step": round(1e3 * s["loop_time"] / s["steps"], 2)}
         print(name, out[name], flush=True)
     return out
@@ -113,7 +113,8 @@ def main(argv=None) -> None:
     ap.add_argument("--parts", action="store_true", help="also time the parts of a coupled step")
     ap.add_argument("--out", type=Path, default=Path(__file__).with_name("coupled_vs_mpm_he_slab_2d.json"))
     args = ap.parse_args(argv)
-    series = {"machine": described(), "date_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M"),
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
+    series = {"machine": described(), "date_utc": now,
               "command": "python benchmarks/coupled_vs_mpm.py " + " ".join(argv or []), "runs": loops(args.runs)}
     runs = series["runs"]
     if "mpm-everywhere" in runs:

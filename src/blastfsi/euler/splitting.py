@@ -53,11 +53,11 @@ def split_step(U, sweep, consts: tuple, cfg: Config, moved=None, parity=None):
 
     branches = [body(a) for a in range(ndim)]
 
+    # the axis of operator i: order[i]. (An ensemble's members carry their own step counters: under vmap the
+    # parity is batched and each operator evaluates every axis's sweep and selects one, the symmetric cost.)
     if parity is None:
         order, count = backward + forward, 2 * ndim
-    # (an ensemble's members carry their own step counters: under vmap the parity is batched and each operator
-    # evaluates every axis's sweep and selects one, the cost of the symmetric splitting)
-    else:  # the axis of operator i: row `parity` of the two orders
+    else:
         order, count = jnp.asarray([forward, backward])[jnp.asarray(parity) % 2], ndim
 
     def operator(i, state):  # i traced in a loop, a Python int where the loop is unrolled (fori)
