@@ -91,12 +91,13 @@ def stable_dt(U, params: Params, cfg: Config, owned=None):
     Split schemes (Lax-Wendroff, HLLC-Hancock): dt = cfl dx / max over cells and axes of (|u_d| + c);
     Lax-Wendroff's directional operators then run at Courant number <= cfl/2 (dt/2 each), so its linear
     limit is cfl = 2; HLLC-Hancock's at <= cfl (dt each, alternating), linear limit 1. HLLC-MUSCL
-    (unsplit): dt = cfl dx / max over cells of sum_d (|u_d| + c), linear limit cfl = 1. Measured (Sod 200
-    cells; 2D blasts of pressure ratio 10 and 1e5, 48^2 walls, 200 steps): LW runs up to cfl 1.8 in 1D and 1.5 in 2D (NaN at 1.95 / 1.8); HLLC-MUSCL up to 1.0 (1.1 in
-    1D); HLLC-Hancock up to 1.2 (the highest tried) on 2D blasts, and the sod and sedov-2d examples
-    (sedov-2d: ambient pressure 1e-6 of the blast's) at 1.1; HLLC-MUSCL the sedov-2d example at its cap
-    1.0. The scenario's caps per scheme: blastfsi.euler.scenario.CFL_MAX. cfl <= 0.5 keeps margin for the
-    positivity of HLLC-MUSCL near strong blasts.
+    (unsplit): dt = cfl dx / max over cells of sum_d (|u_d| + c), linear limit cfl = 1. Measured (Sod
+    200 cells; 2D blasts of pressure ratio 10 and 1e5, 48^2 walls, 200 steps): LW runs up to cfl 1.8 in
+    1D and 1.5 in 2D (NaN at 1.95 / 1.8); HLLC-MUSCL up to 1.0 (1.1 in 1D); HLLC-Hancock up to 1.2 (the
+    highest tried) on 2D blasts, and the sod and sedov-2d examples (sedov-2d: ambient pressure 1e-6 of
+    the blast's) at 1.1; HLLC-MUSCL the sedov-2d example at its cap 1.0. The scenario's caps per scheme:
+    blastfsi.euler.scenario.CFL_MAX. cfl <= 0.5 keeps margin for the positivity of HLLC-MUSCL near
+    strong blasts.
     """
     bad, rate = _bad_and_speed(U, params, cfg)
     if owned is not None:
