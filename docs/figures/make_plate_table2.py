@@ -165,8 +165,7 @@ def cmd_faces(results: Path, ring: float = 0.005) -> None:
     sc = tomllib.loads((results / "scenario.toml").read_text())
     cell = (sc["domain"]["upper"][0] - sc["domain"]["lower"][0]) / sc["grid"]["cells"]
     free_radius = sc["structures"][0]["supports"][0]["lower"][0]  # D / 2: the clamp's inner edge
-    air = lookup("air")
-    p0 = (air.gamma - 1.0) * air.density * air.specific_energy  # the ambient air's pressure (the run's)
+    p0 = lookup("air").pressure  # the ambient air's pressure (the run's)
     rows = []
     for file in sorted((results / "fields").glob("member0_[0-9]*.h5")):
         with h5py.File(file, "r") as f:
