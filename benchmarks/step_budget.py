@@ -44,7 +44,7 @@ from blastfsi.mpm.musl import VOID_DENSITY
 from blastfsi.mpm.viscosity import signal_speed
 from blastfsi.scenario import expand
 from blastfsi.method import compiled_advance
-from blastfsi.simulation import _grow, _stack
+from blastfsi.simulation import _resized, _stack
 from blastfsi.timeloop import FAULT_NONE, FAULT_POOL_FULL
 from machine import cpu_model
 
@@ -153,7 +153,7 @@ def measure(example: str, end: float, every: int, overrides: dict) -> dict:
             diag_s, loop_s = diag_s + t1 - t0, loop_s + t2 - t1
             fault = int(np.asarray(state.fault)[0])
             if fault == FAULT_POOL_FULL:
-                setups, state = _grow(method, setups, state)
+                setups, state = _resized(method, setups, state)
                 static = method.static(setups[0], member_scs[0])
                 advance, _ = compiled_advance(method, static, state, params, sc.time.end, *scalars)
                 diag = compiled_budget(static)

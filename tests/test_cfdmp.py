@@ -217,6 +217,101 @@ def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     assert again.summary["pool_growths"] == 0  # rebuilt at the checkpoint's size before its one compilation
 
 
+def test_a_pool_packed_into_fewer_slots_keeps_every_particle_and_reference(shock):
+    """cfdmp's resize to fewer slots: the structures keep their slots, the gas particles in use follow in their
+    order with every field unchanged, the reservoirs' inflow slots follow their particles (a freed slot's is
+    dropped); resized back up, the packed slots stay."""
+    import jax
+
+    from blastfsi import method as methods
+    from blastfsi.simulation import _members
+
+    cfdmp = methods.get("cfdmp")
+    coupled = shock[0]
+    setup, member = coupled.setups[0], _members(coupled.state)[0]
+    P = member.mpm.particles
+    used = np.flatnonzero(P.active)
+    free = np.flatnonzero(~P.active[: used[-1]])
+    assert used.size > 10 and free.size > 0  # gas left the box: the pool has holes to pack
+    buffer = np.full_like(member.reservoirs.buffer, -1)
+    buffer.flat[0], buffer.flat[1] = used[-1], free[0]
+    member = member._replace(reservoirs=member.reservoirs._replace(buffer=buffer))
+    n_struct = setup.coupling.structure_particles
+    capacity = used.size + 7
+    small_setup, small = cfdmp.resize(setup, member, capacity)
+    Q = small.mpm.particles
+    assert small_setup.capacity == capacity == Q.active.shape[0]
+    assert np.array_equal(np.flatnonzero(Q.active), np.arange(used.size))
+    for a, b in zip(jax.tree_util.tree_leaves(P), jax.tree_util.tree_leaves(Q)):
+        np.testing.assert_array_equal(np.asarray(b)[: used.size], np.asarray(a)[used])
+        np.testing.assert_array_equal(np.asarray(b)[:n_struct], np.asarray(a)[:n_struct])
+    assert small.reservoirs.buffer.flat[0] == used.size - 1 and small.reservoirs.buffer.flat[1] == -1
+    assert cfdmp.pool_needed(small, small_setup) == cfdmp.pool_needed(member, setup)
+    big_setup, big = cfdmp.resize(small_setup, small, 2 * capacity)
+    assert big_setup.capacity == 2 * capacity and not np.any(big.mpm.particles.active[capacity:])
+    np.testing.assert_array_equal(big.mpm.particles.x[:capacity], Q.x)
+    with pytest.raises(ValueError, match="cannot hold"):
+        cfdmp.resize(setup, member, used.size - 1)
+
+
+def test_a_mostly_empty_pool_is_packed_only_when_the_steps_left_repay_the_compilation():
+    """SHRINK x the slots to two significant digits, once GROWTH x the need fits there, and only when the steps
+    left save more (POOL_SHARE of a step scaled with the slots) than a compilation costs."""
+    from blastfsi.simulation import GROWTH, POOL_SHARE, SHRINK, shrunk_capacity
+
+    assert (GROWTH, SHRINK, POOL_SHARE) == (1.25, 0.6, 0.5)
+    # steel-plate-blast at 0.15 ms: 25 264 slots, ~12 000 needed, ~45 ms a step, a 25 s compilation
+    assert shrunk_capacity(25_264, 12_000, 4000, 0.045, 25.0) == 16_000  # saves 4000 x 45 ms x 0.5 x 0.367 = 33 s
+    assert shrunk_capacity(25_264, 12_000, 3000, 0.045, 25.0) is None  # 24.8 s: not worth a compilation
+    assert shrunk_capacity(25_264, 12_900, 1e9, 1.0, 0.0) is None  # 1.25 x 12 900 > 16 000: no headroom left
+    assert shrunk_capacity(2_002, 100, 1e9, 1.0, 0.0) == 1_300 and shrunk_capacity(1_300, 100, 1e9, 1.0, 0.0) == 780
+    assert shrunk_capacity(10, 1, 1e9, 1.0, 0.0) == 6 and shrunk_capacity(6, 4, 1e9, 1.0, 0.0) is None
+
+
+def test_a_mostly_empty_pool_shrinks_and_the_run_goes_on(shock, tmp_path, monkeypatch):  # (shock: its loop)
+    """A pool of 20 x the box's gas (numerics.pool_headroom) is packed into fewer slots once the driver sees it
+    mostly empty (the compilation cost waived, once: the tube's steps are too cheap to repay it): the
+    loop is compiled again (``pool_shrinks``) and the run gives the solution of a snug pool to round-off (only
+    the order of the pool's sums changes), its mass budget closed; a restart from a checkpoint written after
+    the packing rebuilds the pool at the checkpoint's size and continues bit for bit."""
+    import shutil
+
+    from blastfsi import api, method as methods, simulation
+    from blastfsi.io import results
+    from blastfsi.scenario import expand
+
+    shrinks = []
+
+    def worth_it_once(capacity, needed, steps_left, step_seconds, compile_seconds, real=simulation.shrunk_capacity):
+        smaller = None if shrinks else real(capacity, needed, 1e12, 1.0, 0.0)
+        shrinks.extend([smaller] if smaller else [])
+        return smaller
+
+    monkeypatch.setattr(simulation, "shrunk_capacity", worth_it_once)
+    end = example_data("cfdmp-shock-tube")["time"]["end"]
+    over = {**FAST, "numerics.pool_headroom": 20.0, "output.checkpoint_interval": 0.75 * end}
+    res = blastfsi.run("cfdmp-shock-tube", out=tmp_path / "a", set=over)
+    assert res.summary["pool_shrinks"] == 1 and res.summary["pool_growths"] == 0
+    assert_budget_closed(res.summary, 1e-13)
+    initial = methods.get("cfdmp").build(expand(api.load("cfdmp-shock-tube", set=over))[2][0]).capacity
+    assert res.summary["capacity"] == shrinks[0] < initial
+    snug = blastfsi.run("cfdmp-shock-tube", set={**FAST, "output.checkpoint_interval": 0.75 * end})
+    assert res.summary["steps"] == snug.summary["steps"]
+    f, g = res.fields(), snug.fields()
+    for name in ("density", "pressure", "velocity"):
+        assert np.max(np.abs(f[name] - g[name])) <= 1e-9 * np.max(np.abs(g[name]))
+    checkpoint = sorted((tmp_path / "a" / "checkpoints").glob("ckpt_*.h5"))
+    assert len(checkpoint) == 1
+    saved, _ = results.read_checkpoint(checkpoint[0])
+    assert saved["mpm.particles.active"].shape[1] == shrinks[0]  # packed before 0.75 end
+    shutil.copytree(tmp_path / "a", tmp_path / "b")
+    again = blastfsi.restart(tmp_path / "b")
+    assert again.summary["capacity"] == shrinks[0] and again.summary["pool_shrinks"] == 0
+    h = again.fields()
+    for name in ("density", "pressure", "velocity"):
+        np.testing.assert_array_equal(h[name], f[name])
+
+
 def test_euler_cfl_sets_the_eulerian_courant_number_only():
     """numerics.euler_cfl is the Eulerian step's Courant number, numerics.cfl stays the MPM's; unset, both
     are numerics.cfl."""

@@ -150,7 +150,7 @@ def test_schema_dispatches_on_the_method_key():
     with pytest.raises(TypeError, match="lacks"):
         method.register(type("Faceless", (), {"name": "faceless"})())
     half_pool = type("HalfPool", (Decay,), {"pool_leaf": "y"})()  # a GrowingPool needs all three members
-    with pytest.raises(TypeError, match=r"GrowingPool capability but lacks \['pool_needed', 'grow'\]"):
+    with pytest.raises(TypeError, match=r"GrowingPool capability but lacks \['pool_needed', 'resize'\]"):
         method.register(half_pool)
     assert not isinstance(Decay(), method.GrowingPool) and not isinstance(half_pool, method.GrowingPool)
 

@@ -19,8 +19,9 @@ one method, advanced together by ``jit(vmap(advance))``):
 3. ``advance(state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction)``
    in compiled chunks, written with :func:`blastfsi.timeloop.run_until`;
 4. on the host between chunks and at the end, per member (arrays without the
-   ensemble axis): ``snapshot``, ``locate_fault`` (after a fault), ``summary``; a full pool of a
-   :class:`GrowingPool` is enlarged (``pool_needed``, ``grow``) and the loop compiled again.
+   ensemble axis): ``snapshot``, ``locate_fault`` (after a fault), ``summary``; the pool of a
+   :class:`GrowingPool` is enlarged when full and packed into fewer slots when mostly empty (``pool_needed``,
+   ``resize``), and the loop compiled again.
 """
 from __future__ import annotations
 
@@ -192,22 +193,25 @@ class Method(Solver, Reporter, Protocol):
 @typing.runtime_checkable
 class GrowingPool(Protocol):
     """An optional capability: a particle pool that may fill up (the method's advance passes ``pool_full`` to
-    ``timeloop.run_until``). The driver then enlarges the pool and goes on (:func:`blastfsi.simulation._grow`)."""
+    ``timeloop.run_until``) or empty. The driver then enlarges the pool, or packs a mostly empty one into fewer
+    slots, and goes on (:func:`blastfsi.simulation._resized`, :func:`blastfsi.simulation.shrunk_capacity`)."""
 
     pool_leaf: str  # name of a state leaf whose length (axis 0 of a member) is the pool's capacity
 
     def pool_needed(self, state, setup: Setup) -> int:
         """The slots one member's (host) state needs."""
 
-    def grow(self, setup: Setup, state, capacity: int):
-        """(setup, state) of one member in a pool of ``capacity`` slots (more than now), the new slots empty;
-        None when the pool is fixed (the scenario set its size): the run then stops with the pool-full fault."""
+    def resize(self, setup: Setup, state, capacity: int):
+        """(setup, state) of one member in a pool of ``capacity`` slots: more than now (the new slots empty) or
+        fewer, but at least ``pool_needed`` (the particles in use packed into them, every reference to a slot
+        renumbered); None when the pool is fixed (the scenario set its size): a full pool then stops the run
+        with the pool-full fault."""
 
 
 SOLVER_FACE = ("name", "scenario_model", "build", "initial_state", "params", "static", "advance")
 REPORTER_FACE = ("history_columns", "snapshot", "summary", "locate_fault", "plots")
 FACE = SOLVER_FACE + REPORTER_FACE
-POOL_FACE = ("pool_leaf", "pool_needed", "grow")
+POOL_FACE = ("pool_leaf", "pool_needed", "resize")
 METHODS: dict[str, Method] = {}
 _PACKAGE = Path(__file__).parent
 

@@ -51,7 +51,7 @@ UNIT_RULES = (
 )
 PROSE = 60  # strings longer than this are explanations: left to summary.json
 RUN_KEYS = ("method", "status", "error", "time", "steps", "cells", "wall_time", "compile_time", "loop_time",
-            "output_time", "pool_growths")
+            "output_time", "pool_growths", "pool_shrinks")
 NOT_SHOWN = ("warning",)  # printed by the command line on stderr
 
 
@@ -220,7 +220,7 @@ def _run_rows(s: dict) -> list[tuple[str, str]]:
     rows = [(k, str(s[k])) for k in ("method", "status", "error") if s.get(k) is not None]
     if "time" in s:
         rows.append(("simulated time", quantity(s["time"], "s")))
-    rows += [(k, str(s[k])) for k in ("steps", "cells", "pool_growths") if k in s]
+    rows += [(k, str(s[k])) for k in ("steps", "cells", "pool_growths", "pool_shrinks") if k in s]
     if "wall_time" in s:
         parts = [f"{k.split('_')[0]} {duration(s[k])}" for k in ("loop_time", "output_time") if k in s]
         rows.append(("wall time", duration(s["wall_time"]) + (f" ({', '.join(parts)})" if parts else "")))

@@ -19,8 +19,8 @@ compilation cache where it was compiled before, :mod:`blastfsi.runtime`), ``wall
 of the time loop: ``loop_time``, the compiled loop's calls, plus
 ``output_time``, the snapshots and checkpoints written between them, with the
 first-use compilation of their functions, plus the progress bar and checks);
-a method with a growing particle pool adds ``pool_growths``, the times a full pool
-was enlarged and the time loop compiled again.
+a method with a growing particle pool adds ``pool_growths`` and ``pool_shrinks``, the times a full pool
+was enlarged or a mostly empty one packed into fewer slots, and the time loop compiled again.
 """
 from __future__ import annotations
 
@@ -205,6 +205,15 @@ GROWTH = 1.25  # a full particle pool grows to GROWTH x (the particles it needed
 #                costs a recompilation and every step costs in proportion to the pool, so geometric growth keeps
 #                the growths logarithmic in the need and the empty slots below 25 % (no effect on results;
 #                docs/theory/cfdmp.md, "Departures from the paper and tuned constants")
+SHRINK = 0.6  # a mostly empty pool is packed into SHRINK x its slots (two significant digits: the same sizes from
+#               run to run, which the persistent compilation cache then holds) once GROWTH x its need fits there: a
+#               pool that emptied (the gas that the blast pushed into an MPM box flowing out again) stops
+#               costing its empty slots; packing changes only the order of the pool's sums (round-off)
+POOL_SHARE = 0.5  # share of a coupled step's time assumed to scale with the pool's slots, for the decision to
+#                   shrink (measured: 0.79 in steel-plate-blast at 0.15 ms, 41.8 ms a step with 25 264 slots,
+#                   27.1 ms with 14 000)
+LEAST_COMPILE = 2.0  # s, the least a compilation of the time loop is taken to cost in that decision (a load from
+#                      the persistent compilation cache: 1.9 s for he-slab-2d), also when this process reused it
 
 
 def _pool_size(method: methods.Method, state) -> int:
@@ -212,29 +221,65 @@ def _pool_size(method: methods.Method, state) -> int:
     return int(np.shape(dict(_leaf_names(state))[method.pool_leaf])[1])
 
 
-def _grow(method: methods.Method, setups: list, state, capacity: int | None = None):
-    """(setups, state) with every member's particle pool enlarged to one common capacity: ``capacity``, or
-    GROWTH x the largest need; None when the method cannot grow its pool (not a methods.GrowingPool)."""
+def _resized(method: methods.Method, setups: list, state, capacity: int | None = None):
+    """(setups, state) with every member's particle pool resized to one common ``capacity`` (default: enlarged
+    to GROWTH x the largest need); None when the method cannot resize its pool (not a methods.GrowingPool, or
+    the scenario fixed it)."""
     if not isinstance(method, methods.GrowingPool):
         return None
     members = _members(state)
     if capacity is None:
         needed = max(method.pool_needed(m, setup) for m, setup in zip(members, setups))
         capacity = int(np.ceil(GROWTH * needed / 1000.0)) * 1000
-    grown = [method.grow(setup, m, capacity) for setup, m in zip(setups, members)]
-    if any(g is None for g in grown):
+    resized = [method.resize(setup, m, capacity) for setup, m in zip(setups, members)]
+    if any(r is None for r in resized):
         return None
-    return [g[0] for g in grown], _stack([g[1]._replace(fault=np.zeros_like(g[1].fault)) for g in grown], "state")
+    return [r[0] for r in resized], _stack([r[1]._replace(fault=np.zeros_like(r[1].fault)) for r in resized], "state")
+
+
+def shrunk_capacity(capacity: int, needed: int, steps_left: float, step_seconds: float,
+                    compile_seconds: float) -> int | None:
+    """The smaller pool a mostly empty one of ``capacity`` slots is packed into, or None to keep it: SHRINK x
+    ``capacity`` rounded up to two significant digits (the same sizes from run to run), when ``needed`` slots
+    with GROWTH's headroom fit there (the pool then has the room a growth would give it) and the time the
+    ``steps_left`` save, POOL_SHARE of ``step_seconds`` scaled with the slots, exceeds a compilation's
+    ``compile_seconds``."""
+    digits = 10 ** max(len(str(int(SHRINK * capacity))) - 2, 0)
+    smaller = int(np.ceil(SHRINK * capacity / digits)) * digits
+    if smaller >= capacity or GROWTH * needed > smaller:
+        return None
+    saved = steps_left * step_seconds * POOL_SHARE * (1.0 - smaller / capacity)
+    return smaller if saved > compile_seconds else None
+
+
+def _sparse_pool(method: methods.Method, setups: list, state, t_end: float, step_seconds: float,
+                 compile_seconds: float) -> int | None:
+    """:func:`shrunk_capacity` of the batch's pool (the largest need of its members; the steps left at the
+    last step's length), or None; only for a pool the method may resize."""
+    if not isinstance(method, methods.GrowingPool):
+        return None
+    capacity = _pool_size(method, state)
+    active = int(np.max(np.sum(np.asarray(dict(_leaf_names(state))[method.pool_leaf]), axis=1)))
+    if GROWTH * active > SHRINK * capacity:  # (the cheap test first: the full need reads every member)
+        return None
+    needed = max(method.pool_needed(m, setup) for m, setup in zip(_members(state), setups))
+    dt = float(np.min(np.asarray(state.dt_prev)))
+    steps_left = (t_end - float(np.min(np.asarray(state.t)))) / dt if dt > 0.0 else 0.0
+    return shrunk_capacity(capacity, needed, steps_left, step_seconds, compile_seconds)
 
 
 def fit_pool(method: methods.Method, setups: list, saved: dict, fresh):
-    """(setups, fresh) with the particle pool of the freshly built state ``fresh`` enlarged to that of the
-    checkpoint leaves ``saved`` (a pool that grew before the checkpoint); unchanged otherwise."""
+    """(setups, fresh) with the particle pool of the freshly built state ``fresh`` resized to that of the
+    checkpoint leaves ``saved`` (a pool that grew or shrank before the checkpoint); unchanged otherwise."""
     name = method.pool_leaf if isinstance(method, methods.GrowingPool) else None
     if name is None or name not in saved or np.shape(saved[name])[1] == _pool_size(method, fresh):
         return setups, fresh
-    grown = _grow(method, setups, fresh, int(np.shape(saved[name])[1]))
-    return (setups, fresh) if grown is None else grown  # (not grown: the shape check names the mismatch)
+    # (only the shapes of fresh are kept, the checkpoint gives every value: its pool is emptied first, so that
+    # a pool packed before the checkpoint fits, however many particles the initial state holds)
+    emptied = [np.zeros_like(leaf) if n == name else leaf for n, leaf in _leaf_names(xla.to_host(fresh))]
+    fresh = jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(fresh), emptied)
+    resized = _resized(method, setups, fresh, int(np.shape(saved[name])[1]))
+    return (setups, fresh) if resized is None else resized  # (not resized: the shape check names the mismatch)
 
 
 def run(data: dict | list[dict], out: Path | None = None, *, overwrite: bool = False, progress: bool = False,
@@ -329,7 +374,8 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
                   "time loop compiled earlier in this process: reused")
         bar.start(sc.time.end, t_start, int(np.max(np.asarray(state.step))))
         chunk = min(FIRST_CHUNK, chunk_steps)  # steps of the next call of the time loop (next_chunk)
-        started, grow_compile, growths = wallclock.perf_counter(), 0.0, 0
+        started, resize_compile, resizes = wallclock.perf_counter(), 0.0, {"pool_growths": 0, "pool_shrinks": 0}
+        first_compile, step_seconds, fixed_pool = max(compile_time, LEAST_COMPILE), 0.0, False
         spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots, checkpoints, history, summary
 
         def timed(part, fn, *args):
@@ -339,18 +385,19 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
             return value
 
         def advanced(state, t_stop):  # the time loop's call of at most `chunk` steps, waited for; sizes the next
-            nonlocal chunk
+            nonlocal chunk, step_seconds
             before, t0 = int(np.max(np.asarray(state.step))), wallclock.perf_counter()
             steps = max(1, min(chunk, sc.time.max_steps - before))
             state = jax.block_until_ready(advance(state, params, t_stop, steps, *scalars[1:]))
-            chunk = next_chunk(int(np.max(np.asarray(state.step))) - before, wallclock.perf_counter() - t0,
-                               chunk_steps)
+            taken, seconds = int(np.max(np.asarray(state.step))) - before, wallclock.perf_counter() - t0
+            chunk = next_chunk(taken, seconds, chunk_steps)
+            step_seconds = seconds / taken if taken else step_seconds
             return state
 
         def summary(host, status: str) -> list[dict]:  # of each member (host: the batched state on the host)
-            timing = {"wall_time": wallclock.perf_counter() - started - grow_compile,  # (the time loop only)
+            timing = {"wall_time": wallclock.perf_counter() - started - resize_compile,  # (the time loop only)
                       "compile_time": compile_time, "loop_time": spent["loop"], "output_time": spent["output"],
-                      **({"pool_growths": growths} if isinstance(method, methods.GrowingPool) else {})}
+                      **(resizes if isinstance(method, methods.GrowingPool) else {})}
             return _summaries(method, sc, member_scs, setups, host, status, timing)
 
         def outputs(t_stop, host):  # the schedule's at t_stop
@@ -365,16 +412,23 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
             for t_stop in (t for t in stops if t > t_start):
                 while not ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
                     state = timed("loop", advanced, state, t_stop)
-                    grown = _grow(method, setups, state) if np.any(np.asarray(state.fault) == FAULT_POOL_FULL) else None
-                    if grown is not None:  # a larger pool and its compiled loop (its compilation counts as such)
-                        setups, state = grown
-                        bar.stage(f"t = {report.quantity(float(np.min(np.asarray(state.t))), 's')}: particle pool "
-                                  f"full, grown to {_pool_size(method, state)} slots (compiling the time loop again)")
+                    fault = np.asarray(state.fault)
+                    full = np.any(fault == FAULT_POOL_FULL)
+                    healthy = not fixed_pool and np.all(fault == FAULT_NONE)
+                    smaller = _sparse_pool(method, setups, state, stops[-1], step_seconds,
+                                           first_compile) if healthy else None
+                    resized = _resized(method, setups, state, smaller) if full or smaller else None
+                    fixed_pool = fixed_pool or (smaller is not None and resized is None)  # (numerics.capacity)
+                    if resized is not None:  # the resized pool and its compiled loop (its compilation counts as such)
+                        setups, state = resized
+                        now = report.quantity(float(np.min(np.asarray(state.t))), 's')
+                        bar.stage(f"t = {now}: particle pool " + ("full, grown" if full else "mostly empty, packed")
+                                  + f" to {_pool_size(method, state)} slots (compiling the time loop again)")
                         static = method.static(setups[0], member_scs[0])
                         advance, more = methods.compiled_advance(method, static, state, params, stops[-1], *scalars)
                         compile_time += more
-                        grow_compile += more
-                        growths += 1
+                        resize_compile += more
+                        resizes["pool_growths" if full else "pool_shrinks"] += 1
                         continue
                     stop = _stop_reason(state, method, setups, sc)
                     if stop is not None:  # (the history up to it is kept, as are the snapshots and checkpoints)

@@ -152,7 +152,7 @@ class Budget(NamedTuple):
     #                            Eulerian boundary fluxes, particles leaving the run, the flow-out mirror's traction)
     pressure_transfer: jnp.ndarray  # (ndim + 1,) momentum and energy of the scheme's face transfer not carried
     #                                 by the reservoirs (the interface pressure's impulse and work)
-    required: jnp.ndarray  # () int32: active particles an emission needed (> capacity: the run stops)
+    required: jnp.ndarray  # () int32: active particles the last emission needed (> capacity: the run stops)
     structure_out: jnp.ndarray  # () mass of structure particles that left the box (their momentum and energy
     #                             are in boundary_out; structure mass is not part of the gas budget's rows)
     mpm_step: jnp.ndarray  # (ndim + 1,) momentum and energy the MPM steps gave the particles (mpm_content),
@@ -806,7 +806,7 @@ def feed(state: mpm.State, res: Reservoirs, budget: Budget, prim_flat, eos, para
     keep = ~fits | ~fed
     res = Reservoirs(mass=jnp.where(keep, res.mass, 0.0), momentum=jnp.where(keep[..., None], res.momentum, 0.0),
                      energy=jnp.where(keep, res.energy, deficit), buffer=buffer)
-    budget = budget._replace(required=jnp.maximum(budget.required, required.astype(jnp.int32)))
+    budget = budget._replace(required=required.astype(jnp.int32))
     return state._replace(particles=pool), res, budget
 
 

@@ -414,17 +414,34 @@ class Cfdmp:
         return max(int(state.budget.required), active + setup.coupling.pool_margin)
 
     @staticmethod
-    def grow(setup: problem.Setup, state: State, capacity: int):
-        """One member's host state in a pool of ``capacity`` slots, the new ones empty at the end (the slots
-        in use keep their indices); None when ``numerics.capacity`` fixed the pool."""
+    def resize(setup: problem.Setup, state: State, capacity: int):
+        """One member's host state in a pool of ``capacity`` slots; None when ``numerics.capacity`` fixed the
+        pool. A larger pool gets its new, empty slots at the end (the slots in use keep their indices); a
+        smaller one gets the gas particles in use packed, in their order, right after the structures (which
+        keep the first slots), and the inflow particles' slots that the reservoirs keep are renumbered (those
+        of freed slots dropped, as a removed particle's)."""
         if not setup.coupling.capacity_grows:
             return None
         capacity = xla.equal_parts(capacity, setup.devices)
-        P = state.mpm.particles
-        pad = mpm.empty(capacity - setup.capacity, P.point.history.shape[1], P.mass.dtype)
-        grown = jax.tree_util.tree_map(lambda a, b: np.concatenate([np.asarray(a), np.asarray(b)]), P, pad)
+        P = jax.tree_util.tree_map(np.asarray, state.mpm.particles)
+        old = P.active.shape[0]
+        n_struct = setup.coupling.structure_particles
+        if capacity >= old:
+            keep = np.arange(old)
+        else:
+            keep = np.concatenate([np.arange(n_struct), n_struct + np.flatnonzero(P.active[n_struct:])])
+            if keep.size > capacity:
+                raise ValueError(f"a pool of {capacity} slots cannot hold the {keep.size} slots in use")
+        new_slot = np.full(old, -1, np.int64)
+        new_slot[keep] = np.arange(keep.size)
+        pad = jax.tree_util.tree_map(np.asarray, mpm.empty(capacity - keep.size, P.point.history.shape[1],
+                                                           P.mass.dtype))
+        resized = jax.tree_util.tree_map(lambda a, b: np.concatenate([a[keep], b]), P, pad)
+        buffer = np.asarray(state.reservoirs.buffer)
+        buffer = np.where(buffer >= 0, new_slot[np.clip(buffer, 0, old - 1)], -1).astype(buffer.dtype)
         setup = dataclasses.replace(setup, capacity=int(capacity))
-        return setup, state._replace(mpm=state.mpm._replace(particles=grown))
+        return setup, state._replace(mpm=state.mpm._replace(particles=resized),
+                                     reservoirs=state.reservoirs._replace(buffer=buffer))
 
     def locate_fault(self, state: State, setup: problem.Setup) -> str:
         budget = state.budget
@@ -780,6 +797,6 @@ def _activate(s: State, params: Params, cs: cp.Static) -> State:
     rows, gas_mass = cp.gas_rows(ms.particles, cs)
     U = cp.fictitious(s.U, rows, gas_mass, lay)
     baseline = system_totals(U, ms.particles, s.reservoirs, lay, cs)[0]
-    budget = s.budget._replace(required=jnp.maximum(s.budget.required, required.astype(jnp.int32)))
+    budget = s.budget._replace(required=required.astype(jnp.int32))
     return s._replace(U=U, mpm=ms, budget=budget, coupled=jnp.asarray(True), baseline=baseline,
                       displaced=box_gas - created)
