@@ -541,8 +541,10 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         channels += [amw] + [amw * P.v[:, i] for i in range(d)]
     nodal = particle_to_grid(idx, channels, n_nodes, combined)
     m_I, p_I, f_I = nodal[:, 0], nodal[:, 1:1 + d], nodal[:, 1 + d:1 + 2 * d]  # Eqs. (21), (18), (19)
-    if callable(source):
-        source = source(P, idx, w)
+    if callable(source):  # evaluated once, kept in memory: fused into the step, XLA:CPU took 5.7 ms more a step of
+        #                   steel-plate-blast at 0.3 ms (19.2 against 13.5 ms, with the source's own 2.2 ms)
+        source_of = source
+        source = materialise(lambda a: source_of(*a), (P, idx, w))
     if source is not None:  # Eqs. (37)-(39)
         m_I, p_I, f_I = m_I + source.mass, p_I + source.momentum, f_I + source.force
     f_I = f_I + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
