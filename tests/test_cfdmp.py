@@ -191,6 +191,7 @@ def test_a_full_pool_grows_and_a_fixed_one_stops_the_run():
         blastfsi.run("cfdmp-shock-tube", set={**FAST, "numerics.capacity": initial})
 
 
+@pytest.mark.slow  # default-suite time: a restart into a resized pool is in the default suite (the packed pool's)
 def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     """A checkpoint written after the pool grew holds the larger pool; --restart rebuilds the run's initial
     state, grows its pool to the checkpoint's and continues bit for bit. (A headroom of 1: the box's gas
