@@ -375,7 +375,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
         bar.start(sc.time.end, t_start, int(np.max(np.asarray(state.step))))
         chunk = min(FIRST_CHUNK, chunk_steps)  # steps of the next call of the time loop (next_chunk)
         started, resize_compile, resizes = wallclock.perf_counter(), 0.0, {"pool_growths": 0, "pool_shrinks": 0}
-        first_compile, step_seconds, fixed_pool = max(compile_time, LEAST_COMPILE), 0.0, False
+        compile_cost, step_seconds, fixed_pool = max(compile_time, LEAST_COMPILE), 0.0, False
         spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots, checkpoints, history, summary
 
         def timed(part, fn, *args):
@@ -416,7 +416,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
                     full = np.any(fault == FAULT_POOL_FULL)
                     healthy = not fixed_pool and np.all(fault == FAULT_NONE)
                     smaller = _sparse_pool(method, setups, state, stops[-1], step_seconds,
-                                           first_compile) if healthy else None
+                                           compile_cost) if healthy else None
                     resized = _resized(method, setups, state, smaller) if full or smaller else None
                     fixed_pool = fixed_pool or (smaller is not None and resized is None)  # (numerics.capacity)
                     if resized is not None:  # the resized pool and its compiled loop (its compilation counts as such)
