@@ -304,6 +304,7 @@ def _split_runs(folder, *args):
     return json.loads(line[len("REPORT"):])
 
 
+@pytest.mark.slow  # default-suite time (77 s on 2 cores, the suite at 536-619 s): the device checks below stay
 def test_split_runs_on_eight_virtual_devices(tmp_path):
     """One subprocess with 8 virtual CPU devices runs every split case (one test, so that one worker pays
     for it):
