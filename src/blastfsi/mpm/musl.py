@@ -49,13 +49,36 @@ One step of length dt (all particle loops are whole-array operations):
    more energy still: air at 1.2e-4-3e-4 kg/m^3 in the near vacuum behind
    steel-plate-blast's bridge fell from 2e5 to -5e5 J/kg within 10 us (with
    pure FLIP it stayed positive), and the Eulerian cells read from it became
-   non-physical. So c_p takes at most the particle's internal energy,
-   c_p >= -max(e_p, 0) (both gases' e >= 0 in every physical state: an ideal
-   gas's and, on and above their detonation isentrope, the products'); the
-   energy it declines is the step's non-conservation, which a coupled run's
-   budget books.
+   non-physical.
+   The heat is the dissipation of velocity differences the grid cannot
+   resolve, between the particles that share nodes, so it belongs to those
+   nodes' gas, not to the particle whose deviation it was: each node's heat
+   H_I = sum_q N_Iq m_q c_q is shared by its blended particles in proportion
+   to alpha m, and a particle takes c'_p = alpha_p sum_I N_Ip H_I / A_I
+   (A_I = sum_q N_Iq alpha_q m_q). sum_p m_p c'_p = sum_I H_I = sum_p m_p c_p:
+   still exact; a particle alone on its nodes keeps its own c_p; particles
+   sharing nodes heat by the same amount per unit mass. Kept as c_p, the
+   heat went to the particles that deviate most, the light ones: rarefied
+   air among heavier gas in steel-plate-blast (1e-4 to 1e-2 kg/m^3) was
+   heated by ~1e6 J/kg a step to 1e8-1e9 J/kg (the Eulerian solver's gas
+   there holds <= 1.4e6 J/kg from 0.18 ms) and its 8-23 km/s sound set the
+   step, 40-80 ns against the steel's 169 ns. Shared (three runs against
+   three, the count of steps moves with round-off): the hottest gas particle
+   held 6.6e7-8.4e7 J/kg at 0.25-0.35 ms against 1.9e8-3.8e8, and at most
+   4.1e8 later against 1.9e9; 4609-5217 steps against 5009-6391; the plate's
+   peak deflection +0.4 % (docs/validation.md).
+   c'_p takes at most half the particle's internal energy,
+   c'_p >= -MAX_ENERGY_SHARE max(e_p, 0) (the bound of the pressure relaxation,
+   :mod:`blastfsi.mpm.relaxation`; both gases' e > 0 in every physical state:
+   an ideal gas's and, on and above their detonation isentrope, the
+   products'; e = 0 would give p = 0, which the run's fault check rejects:
+   allowed the whole of it, steel-plate-blast with the shared heat stopped
+   at 0.35 ms on a cell read from the particles, with half it ran to its
+   end three times); the energy it declines is the step's non-conservation,
+   which a coupled run's budget books.
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
-   momentum; face conditions and constraints again.
+   momentum (and of the nodes' blend heat, gathered back with the velocity
+   gradient of step 5); face conditions and constraints again.
 5. Strain and spin increments from the re-mapped nodal velocities, Eqs. (27)-(28)
    (gas particles where :func:`cell_centre_gradient` applies: at the cell centre, as their force);
    density, Eq. (29) (rho / (1 + d eps_kk); no deformation gradient is kept);
@@ -580,23 +603,31 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if config.prescribed:
         v_p = jnp.where(P.prescribed, P.prescribed_velocity, v_p)
         x_p = jnp.where(P.prescribed & act[:, None], P.x + dt * P.prescribed_velocity, x_p)
-    # Eq. (26): re-map of the updated particle momentum
-    p2 = particle_to_grid(idx, [mw * v_p[:, i] for i in range(d)], n_nodes, combined)
+    # Eq. (26): re-map of the updated particle momentum; with the blend, each node's blend heat too (step 3)
+    remap = [mw * v_p[:, i] for i in range(d)] + ([mw * blend_heat] if config.blend else [])
+    p2 = particle_to_grid(idx, remap, n_nodes, combined)
+    p2, heat_I = p2[:, :d], p2[:, d:]
     if source is not None:
         p2 = p2 + source.momentum
     v2_I = _constrain(p2 * inv_m, p_fix, m_fix, grid, config.prescribed)
     # Eqs. (27)-(28) from the velocity gradient L_ij = sum_I v_iI dN_I/dx_j (r-z: and the hoop rate v_r / r)
     pairs = [(i, j) for i in range(d) for j in range(d)]
 
-    def velocity_gradient(a):
-        v_I, idx, grad, w_hoop, r_hoop = a
-        v2 = gather_columns(idx, v_I, combined)
+    def velocity_gradient(a):  # (rows of L, and with the blend the heat share sum_I N_Ip H_I / A_I last)
+        table, idx, w, grad, w_hoop, r_hoop = a
+        v2 = gather_columns(idx, table, combined)
         rows = [stencil_sum(v2[i] * grad[j]) for i, j in pairs]
-        return jnp.stack(rows + ([stencil_sum(w_hoop * v2[0]) / r_hoop] if grid.axisymmetric else []))
+        rows += [stencil_sum(w_hoop * v2[0]) / r_hoop] if grid.axisymmetric else []
+        return jnp.stack(rows + ([stencil_sum(w * v2[d])] if config.blend else []))
 
+    table = v2_I
+    if config.blend:  # H_I / A_I: the node's blend heat per unit alpha-weighted mass
+        table = jnp.concatenate([v2_I, heat_I / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]], axis=1)
     # rows kept in memory (materialise): fused into the (n, 3, 3) increments, XLA:CPU gathered and summed
     # each of their elements on its own (the 3D Johnson-Cook step ~1.3x slower, measured)
-    rows = materialise(velocity_gradient, (v2_I, idx, grad, w_hoop, r_hoop))
+    rows = materialise(velocity_gradient, (table, idx, w, grad, w_hoop, r_hoop))
+    if config.blend:  # step 3: the particle's share of its nodes' blend heat
+        rows, blend_heat = rows[:-1], alpha * rows[-1]
     if fill is not None:  # the gas particle's share of its cell's volume change (cell_centre_gradient)
         rows = rows * fill
     L = {ij: rows[k] for k, ij in enumerate(pairs)}
@@ -616,9 +647,9 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     rho = ps.density / (1.0 + dvol)  # Eq. (29)
     # q work, -q dV per unit mass (Eq. 13 with p + q); the kinetic energy the PIC share takes heats the gas
     energy = ps.energy - P.q * dvol / ps.density
-    # the blend heat is indefinite per particle (its first term; docstring step 3): it takes at most the
+    # the blend heat is indefinite per particle (its first term; docstring step 3): it takes at most half the
     # particle's internal energy, what it declines stays with the particle (booked as the step's change)
-    energy = energy + jnp.maximum(blend_heat, -jnp.maximum(energy, 0.0))
+    energy = energy + jnp.maximum(blend_heat, -relaxation.MAX_ENERGY_SHARE * jnp.maximum(energy, 0.0))
     if void is not None:  # void gas does no work (and takes no blend heat: alpha = 0)
         energy = jnp.where(void, ps.energy, energy)
     # the models read the increments many times: materialised, not recomputed from the gathers in each read
