@@ -5,6 +5,7 @@ and the ConWep oblique-reflection blend (blastfsi.exact.oblique_reflection).
 
     python docs/figures/make_plate_load.py run DIR [--cases 1 4] [--cells 120 160 240 360]
     python docs/figures/make_plate_load.py figures DIR      # plate_load.json, plate_load.png here; tables on stdout
+    python docs/figures/make_plate_load.py coupled DIR [--cases 1 4]  # the coupled solver's load; table on stdout
 
 Set-up (r-z, ``domain.geometry = "axisymmetric"``): r in [0, 0.3] m (axis, flow-out at r = 0.3 m), z in
 [-0.08, 0.1] m (flow-out behind the charge, the rigid plate = a ``wall`` at z = 0.1 m); the charge centre at
@@ -16,6 +17,15 @@ so the grids differ only in the 2D solution. Gauges at every wall cell centre (e
 100 gauges; z = 0.1 - dx/2, half a cell off the wall), histories every 1 us to 0.5 ms; field snapshots every 5 us (the products' mass fraction at
 the wall) on the 1.25 mm grid only (the 2.5 mm run of case 1 has them every 5 us), removed after reading
 (writing one costs ~1 s).
+
+``coupled``: the same load from the ``cfdmp`` method, the shipped examples of the two cases (``steel-plate-blast``,
+``steel-plate-blast-case4``: 2.5 mm cells, the plate in the MPM box, the gas in front of it as particles) with the
+plate held at rest (one support over all of it but its back row of particles: a rigid plate of the same
+shape, r < 0.28 m). The supports'
+reaction is the load's total impulse on the plate's faces (front and back; the ambient pressure on the two cancels),
+and gauges half a cell in front of the face, at the cell centres nearest R_GAUGES, give the positive-phase impulse
+there (from the gas particles); against the ``euler`` run of the same cells (``DIR/case<k>-c120.json`` of ``run``:
+its wall cells' impulse, totalled over the same r < 0.28 m). Writes ``DIR/coupled-case<k>.json``.
 
 Per run (``DIR/<case>-c<cells>.json``): along the wall, per cell, the positive-phase impulse and the peak
 overpressure (the solver's per-step blast maps), the impulse to 0.5 ms (history, trapezoid), the
@@ -302,6 +312,57 @@ def _figure(out) -> None:
     fig.savefig(PNG, dpi=120)
 
 
+COUPLED_EXAMPLES = {"1": "steel-plate-blast", "4": "steel-plate-blast-case4"}
+
+
+def coupled_scenario(case: str) -> dict:
+    """The shipped example of ``case`` with its plate held whole (rigid) and gauges half a cell in front of it."""
+    from blastfsi.api import example_data
+
+    data = example_data(COUPLED_EXAMPLES[case])
+    plate = data["structures"][0]
+    dx = (data["domain"]["upper"][0] - data["domain"]["lower"][0]) / data["grid"]["cells"]
+    # (a body cannot be held whole: all of it but the back row of particles, which the rest holds elastically)
+    plate["supports"] = [{"lower": list(plate["lower"]), "upper": [plate["upper"][0], plate["upper"][1] - 0.5 * dx]}]
+    rc = [(np.floor(r / dx) + 0.5) * dx for r in R_GAUGES]  # the cell centre at or just beyond each radius
+    data["output"].update(fields=0, plots=False, checkpoint_interval=None, tracers=[],
+                          gauges=[[float(r), plate["lower"][1] - 0.5 * dx] for r in rc])
+    return data
+
+
+def cmd_coupled(folder: Path, cases) -> None:
+    import blastfsi
+    from blastfsi.io.results import read_history
+
+    for case in cases:
+        path = folder / f"coupled-case{case}.json"
+        if not path.exists():
+            data = coupled_scenario(case)
+            res = blastfsi.run(data, out=folder / f"coupled-case{case}-run", overwrite=True)
+            s, h = res.summary, read_history(folder / f"coupled-case{case}-run" / "history.csv")
+            path.write_text(json.dumps({
+                "case": case, "gauge_r": [g["position"][0] for g in s["gauges"]],
+                "positive_impulse": [g["impulse"] for g in s["gauges"]],
+                "peak_overpressure": [g["peak_overpressure"] for g in s["gauges"]],
+                "reaction_impulse": -float(np.asarray(h["reaction_impulse_y"])[-1]), "time_end": s["time"],
+                "held_radius": data["structures"][0]["upper"][0], "steps": s["steps"],
+                "loop_time": s["loop_time"]}) + "\n")
+        c = json.loads(path.read_text())
+        e = json.loads((folder / f"case{case}-c120.json").read_text())
+        rc, dx = np.asarray(e["r"]), e["dx"]
+        held = rc < c["held_radius"]
+        total = float(np.sum(np.asarray(e["positive_impulse"])[held] * 2.0 * np.pi * rc[held] * dx))
+        print(f"case {case}: impulse on the held plate (r < {c['held_radius']} m): coupled {c['reaction_impulse']:.1f} "
+              f"N s (supports' reaction to {c['time_end'] * 1e3:.2f} ms), euler {total:.1f} N s (positive phase, "
+              f"wall cells), ratio {c['reaction_impulse'] / total:.3f}; {c['steps']} steps, loop {c['loop_time']:.0f} s")
+        print("| r [mm] | " + " | ".join(f"{1e3 * r:.1f}" for r in c["gauge_r"]) + " |")
+        print("|---" * (len(c["gauge_r"]) + 1) + "|")
+        euler = [_at(rc, e["positive_impulse"], r) for r in c["gauge_r"]]
+        print("| euler [kPa s] | " + " | ".join(f"{v / 1e3:.2f}" for v in euler) + " |")
+        print("| cfdmp [kPa s] | " + " | ".join(f"{v / 1e3:.2f}" for v in c["positive_impulse"]) + " |")
+        print("| cfdmp / euler | " + " | ".join(f"{a / b:.3f}" for a, b in zip(c["positive_impulse"], euler)) + " |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -311,9 +372,14 @@ def main(argv=None) -> int:
     r.add_argument("--cells", nargs="+", type=int, default=list(CELLS))
     f = sub.add_parser("figures")
     f.add_argument("dir", type=Path)
+    c = sub.add_parser("coupled")
+    c.add_argument("dir", type=Path)
+    c.add_argument("--cases", nargs="+", default=list(COUPLED_EXAMPLES), choices=list(COUPLED_EXAMPLES))
     a = ap.parse_args(argv)
     if a.cmd == "run":
         cmd_run(a.dir, a.cases, a.cells)
+    elif a.cmd == "coupled":
+        cmd_coupled(a.dir, a.cases)
     else:
         cmd_figures(a.dir)
     return 0
