@@ -21,9 +21,8 @@ the wall) on the 1.25 mm grid only (the 2.5 mm run of case 1 has them every 5 us
 ``coupled``: the same load from the ``cfdmp`` method, the shipped examples of the two cases (``steel-plate-blast``,
 ``steel-plate-blast-case4``: 2.5 mm cells, the plate in the MPM box, the gas in front of it as particles) with the
 plate held at rest (one support over all of it but its back row of particles: a rigid plate of the same
-shape, r < 0.28 m). The supports'
-reaction is the load's total impulse on the plate's faces (front and back; the ambient pressure on the two cancels),
-and gauges half a cell in front of the face, at the cell centres nearest R_GAUGES, give the positive-phase impulse
+shape, r < 0.28 m). The supports' reaction is the load's total impulse on the plate's faces (front and back; the
+ambient pressure on the two cancels), and gauges half a cell in front of the face, at the cell centres nearest R_GAUGES, give the positive-phase impulse
 there (from the gas particles); against the ``euler`` run of the same cells (``DIR/case<k>-c120.json`` of ``run``:
 its wall cells' impulse, totalled over the same r < 0.28 m). Writes ``DIR/coupled-case<k>.json``.
 
@@ -316,7 +315,7 @@ COUPLED_EXAMPLES = {"1": "steel-plate-blast", "4": "steel-plate-blast-case4"}
 
 
 def coupled_scenario(case: str) -> dict:
-    """The shipped example of ``case`` with its plate held whole (rigid) and gauges half a cell in front of it."""
+    """The shipped example of ``case`` with its plate held at rest (rigid) and gauges half a cell in front of it."""
     from blastfsi.api import example_data
 
     data = example_data(COUPLED_EXAMPLES[case])
