@@ -62,19 +62,15 @@ One step of length dt (all particle loops are whole-array operations):
    air among heavier gas in steel-plate-blast (1e-4 to 1e-2 kg/m^3) was
    heated by ~1e6 J/kg a step to 1e8-1e9 J/kg (the Eulerian solver's gas
    there holds <= 1.4e6 J/kg from 0.18 ms) and its 8-23 km/s sound set the
-   step, 40-80 ns against the steel's 169 ns. Shared (three runs against
-   three, the count of steps moves with round-off): the hottest gas particle
-   held 6.6e7-8.4e7 J/kg at 0.25-0.35 ms against 1.9e8-3.8e8, and at most
-   4.1e8 later against 1.9e9; 4609-5217 steps against 5009-6391; the plate's
-   peak deflection +0.4 % (docs/validation.md).
+   step, 40-80 ns against the steel's 169 ns; shared, the hottest held
+   <= 4.1e8 J/kg.
    c'_p takes at most half the particle's internal energy,
    c'_p >= -MAX_ENERGY_SHARE max(e_p, 0) (the bound of the pressure relaxation,
    :mod:`blastfsi.mpm.relaxation`; both gases' e > 0 in every physical state:
    an ideal gas's and, on and above their detonation isentrope, the
    products'; e = 0 would give p = 0, which the run's fault check rejects:
-   allowed the whole of it, steel-plate-blast with the shared heat stopped
-   at 0.35 ms on a cell read from the particles, with half it ran to its
-   end three times); the energy it declines is the step's non-conservation,
+   allowed the whole of it, steel-plate-blast stopped at 0.35 ms on a cell
+   read from the particles); the energy it declines is the step's non-conservation,
    which a coupled run's budget books.
 4. Velocity re-map, Eq. (26): a second scatter of the updated particle
    momentum (and of the nodes' blend heat, gathered back with the velocity
@@ -586,7 +582,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     table = [v_new - v_old, v_new]
     if config.blend:
         m_a = nodal[:, blend_at]
-        u_I = nodal[:, blend_at + 1:blend_at + 1 + d] / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]
+        m_a = jnp.where(m_a > 0.0, m_a, 1.0)[:, None]  # (nodes without blended mass: any divisor, nothing to share)
+        u_I = nodal[:, blend_at + 1:blend_at + 1 + d] / m_a
         table.append(row_sum(v_new * u_I)[:, None])
     moved = grid_to_particle(idx, w, jnp.concatenate(table, axis=1), combined)
     increment, pic = _pad3(moved[:d]), _pad3(moved[d:2 * d])  # S (n - g), S n
@@ -622,7 +619,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
 
     table = v2_I
     if config.blend:  # H_I / A_I: the node's blend heat per unit alpha-weighted mass
-        table = jnp.concatenate([v2_I, heat_I / jnp.where(m_a > 0.0, m_a, 1.0)[:, None]], axis=1)
+        table = jnp.concatenate([v2_I, heat_I / m_a], axis=1)
     # rows kept in memory (materialise): fused into the (n, 3, 3) increments, XLA:CPU gathered and summed
     # each of their elements on its own (the 3D Johnson-Cook step ~1.3x slower, measured)
     rows = materialise(velocity_gradient, (table, idx, w, grad, w_hoop, r_hoop))
