@@ -425,17 +425,28 @@ def parse_value(text: str):
 
 
 def set_dotted(data: dict, key: str, value) -> dict:
-    """A copy of ``data`` with ``value`` at the dotted ``key`` (tables created as needed)."""
+    """A copy of ``data`` with ``value`` at the dotted ``key`` (tables created as needed). A whole-number part
+    indexes a list: ``structures.0.material`` is the first structure's material, ``domain.upper.1`` the second
+    coordinate; an index must name an entry that exists."""
     parts = key.strip().split(".")
     if not all(parts):
         raise ScenarioError(f"key {key!r} is not a dotted key path")
     out = copy.deepcopy(data)
-    node = out
-    for p in parts[:-1]:
-        node = node.setdefault(p, {})
-        if not isinstance(node, dict):
-            raise ScenarioError(f"{key}: {p!r} is a value, not a table")
-    node[parts[-1]] = value
+    node, path = out, []
+    for p, last in zip(parts, [False] * (len(parts) - 1) + [True]):
+        where = ".".join(path) or "the scenario"
+        if isinstance(node, list):
+            if not p.isdigit() or int(p) >= len(node):
+                raise ScenarioError(f"{key}: {where} is a list of {len(node)} entries, so {p!r} must be an index "
+                                    f"from 0 to {len(node) - 1}")
+            p = int(p)
+        elif not isinstance(node, dict):
+            raise ScenarioError(f"{key}: {where} is a value, not a table")
+        if last:
+            node[p] = value
+        else:
+            node = node.setdefault(p, {}) if isinstance(node, dict) else node[p]
+        path.append(str(p))
     return out
 
 
