@@ -26,11 +26,19 @@ def device_control_flow() -> bool:
     return _cpu()
 
 
-def combined_scatter() -> bool:
-    """True where the particle-to-grid transfer is fastest as one scatter of rows of all channels (GPUs);
-    False on the CPU, where XLA:CPU scatters rows with a generic per-element loop and scalar scatters,
-    one per channel and stencil node, are faster (:func:`blastfsi.mpm.musl.particle_to_grid`)."""
-    return not _cpu()
+def combined_scatter(dim: int) -> bool:
+    """True where the particle-to-grid transfer of a ``dim``-dimensional grid is best done as one scatter of
+    rows of all channels, False where as scalar scatters, one per channel and stencil node
+    (:func:`blastfsi.mpm.musl.particle_to_grid`; both add in the same order: the same sums, bit for bit).
+    GPUs: rows. The CPU: rows up to 2D, scalars in 3D. The scalar form unrolls channels x stencil nodes into
+    separate scatters, which the compiler pays for: measured on a 2-core Intel Xeon (jax 0.10.2, float64,
+    first runs without the compilation cache, ``benchmarks/compile_baseline.py``), the time loop of
+    he-slab-2d compiles in 18.3 s with rows against 23.4 s with scalars and steel-plate-blast in 15.0 s
+    against 22.1 s, at the same loop time (17.2 s and 32.6 s); a 2D MPM run (taylor-bar) loops in the same
+    time either way. In 3D (27 stencil nodes) XLA:CPU's generic per-element loop over rows costs more than
+    it saves: the Johnson-Cook block of ``benchmarks/bench_mpm.py`` (24^3 cells, 110 592 particles) steps
+    2.09e6 particle-steps/s with scalars against 1.81e6 with rows."""
+    return not _cpu() or dim <= 2
 
 
 def blocked_sweeps() -> bool:

@@ -159,7 +159,7 @@ class Config:
     shape: Shape
     models: tuple  # Model per material index
     prescribed: bool  # some particles have a prescribed velocity (adds the constraint channels)
-    combined_scatter: bool  # one row scatter/gather of all channels (GPU) or one per channel (CPU)
+    combined_scatter: bool  # one row scatter/gather of all channels, or one per channel and stencil node
     blend: bool = False  # some materials have a PIC share (Params.pic_fraction > 0; adds its channels)
     model_slots: tuple | None = None  # per model, the pool slots (start, stop) its particles can occupy
     #                                   (None: all): a model's update runs on those slots only
@@ -219,7 +219,7 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
     if not models or not all(isinstance(m, Model) for m in models):
         raise MPMError(f"materials: expected one or more constitutive Models, got {models!r}")
     if combined_scatter is None:
-        combined_scatter = xla.combined_scatter()
+        combined_scatter = xla.combined_scatter(grid.dim)
     if model_slots is not None:
         model_slots = tuple((int(a), int(b)) for a, b in model_slots)
         if len(model_slots) != len(models) or any(not 0 <= a <= b for a, b in model_slots):
@@ -334,13 +334,13 @@ def particle_to_grid(idx, channels, num_nodes: int, combined: bool):
     """sum_p over the stencil of each (S, n) channel -> (num_nodes, C).
 
     ``combined``: one scatter of the stacked channels (rows of C values), the
-    fast form on GPUs. Otherwise scalar scatters per channel: on XLA:CPU,
-    scatters and gathers of rows run a generic per-element loop (measured, 3D,
-    100k particles, 2-core CPU: the whole step ~1.2x faster with scalar ones),
-    and a channel is added one stencil node at a time (S scatters of n values,
+    form of GPUs and of 1D and 2D grids on the CPU. Otherwise scalar scatters
+    per channel, for 3D on the CPU, where XLA:CPU scatters and gathers rows with
+    a generic per-element loop (the 3D Johnson-Cook step 1.15x faster with
+    scalar ones; :func:`blastfsi.xla.combined_scatter` gives the measurements):
+    a channel is added one stencil node at a time (S scatters of n values,
     each reading a row of the channel where it is computed, in the same order
-    of additions as one scatter of all S n values: bit for bit the same sums,
-    the step 6 % (3D Johnson-Cook) to 12 % (he-slab-2d gas) faster).
+    of additions as one scatter of all S n values: bit for bit the same sums).
     """
     dtype = channels[0].dtype
     if combined:
