@@ -68,8 +68,10 @@ def main(argv=None) -> None:
         rows[case] = {f"old ({old})": measured(case, args.old_src), f"this ({this})": measured(case, None)}
         if args.variants:
             rows[case][f"this ({this}), scalar scatters"] = measured(case, None, scalar=True)
-    record = {"machine": described(), "date_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M"),
-              "command": "python benchmarks/compile_baseline.py " + " ".join(argv if argv is not None else sys.argv[1:]),
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
+    given = argv if argv is not None else sys.argv[1:]
+    record = {"machine": described(), "date_utc": now,
+              "command": "python benchmarks/compile_baseline.py " + " ".join(given),
               "cases": {k: f"time.end = {v} s, no output, 101 history samples" for k, v in CASES.items()},
               "rows": rows}
     args.out.write_text(json.dumps(record, indent=1) + "\n")
