@@ -405,8 +405,102 @@ def test_cfdmp_devices_checked_naming_the_key():
         run(data)
 
 
-def test_the_lagrangian_chain_has_no_devices_key():
-    data = tomllib.loads((files("blastfsi.examples") / "plate1d-sedov.toml").read_text())
-    data.setdefault("numerics", {})["devices"] = 2
-    with pytest.raises(ScenarioError, match="numerics.devices"):
-        expand(data)
+MEMBERS_SCRIPT = textwrap.dedent('''
+    import copy, json, pathlib, re, sys, tomllib
+    from importlib.resources import files
+    import jax
+    import numpy as np
+    from blastfsi import method as methods, simulation
+    from blastfsi.scenario import ScenarioError
+
+    data = tomllib.loads((files("blastfsi.examples") / "plate1d-uniform.toml").read_text())
+    data["grid"]["cells"] = 200
+    data["time"]["end"] = 0.0155
+    data["output"].update({"fields": 0, "plots": False, "history_samples": 101})
+    data["sweep"] = {"overpressure": [4e5, 8e5], "beta_s": [0.5, 1.0, 2.0, 4.0]}  # 8 members
+
+    def with_devices(d, n):
+        d = copy.deepcopy(d)
+        d.setdefault("numerics", {})["devices"] = n
+        return d
+
+    def leaves(res):
+        return {k: np.asarray(v) for k, v in res.state._asdict().items() if np.asarray(v).dtype.kind == "f"}
+
+    def collectives(exe):  # per kind, the shapes of the compiled loop's collectives
+        found = {}
+        for line in exe.as_text().splitlines():
+            m = re.search(r"= (\\S+) (all-gather|all-reduce|collective-permute|all-to-all|reduce-scatter)(-start)?\\(",
+                          line)
+            if m:
+                found.setdefault(m.group(2), []).append(m.group(1))
+        return found
+
+    report, ref = {"visible": len(jax.devices())}, None
+    for n in (1, 2, 8):
+        res = simulation.run(with_devices(data, n))
+        got = leaves(res)
+        entry = {"devices_used": len(res.state.x.sharding.device_set), "steps": np.asarray(res.state.step).tolist(),
+                 "summaries": [{k: m[k] for k in ("plate_velocity", "plate_impulse", "peak_overpressure")}
+                               for m in res.summaries]}
+        if ref is None:
+            ref = got
+        else:
+            entry["differs"] = sorted(k for k in ref if not np.array_equal(ref[k], got[k], equal_nan=True))
+            entry["collectives"] = collectives(list(methods._EXECUTABLES.values())[-1])
+        report[f"members/{n}"] = entry
+
+    # a checkpoint written on 2 devices, continued on 4 and on 1
+    out = pathlib.Path(sys.argv[1]) / "sweep"
+    ckpt = dict(data, output=dict(data["output"], checkpoint_interval=0.008))
+    whole = simulation.run(with_devices(ckpt, 2), out=out)
+    for n in (4, 1):
+        again = simulation.run(with_devices(ckpt, n), out=out, restart=True)
+        report[f"restart/{n}"] = {"differs": sorted(k for k, v in leaves(whole).items()
+                                                    if not np.array_equal(v, leaves(again)[k], equal_nan=True)),
+                                  "devices_used": len(again.state.x.sharding.device_set)}
+
+    def refused(d):
+        try:
+            simulation.run(d)
+        except ScenarioError as err:
+            return str(err)
+        return None
+
+    report["three_for_eight"] = refused(with_devices(data, 3))
+    single = copy.deepcopy(data)
+    del single["sweep"]
+    report["two_for_one"] = refused(with_devices(single, 2))
+    print("REPORT" + json.dumps(report))
+''')
+
+
+def test_sweep_members_spread_over_virtual_devices(tmp_path):
+    """lagrangian1d's numerics.devices spreads the members of a sweep over the devices (each chain whole on one
+    device): on 2 and 8 virtual CPU devices an 8-member plate sweep gives the one-device run's state bit for
+    bit, lies on that many devices, and its compiled loop moves no member's data between devices (the only
+    collectives are the scalar all-reduces of the loop's condition: every member done, none faulted); a
+    checkpoint written on 2 devices continues on 4 and on 1 to the uninterrupted run's state; a device count
+    that does not divide the members is refused naming the key."""
+    script = tmp_path / "members.py"
+    script.write_text(MEMBERS_SCRIPT)
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=8", "JAX_PLATFORMS": "cpu",
+           "BLASTFSI_NO_CACHE": "1"}
+    proc = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True, text=True, env=env,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    measured = json.loads(next(ln for ln in proc.stdout.splitlines() if ln.startswith("REPORT"))[len("REPORT"):])
+    assert measured["visible"] == 8
+    one = measured["members/1"]
+    assert one["devices_used"] == 1 and min(one["steps"]) > 500  # the plates were loaded (arrival ~14 ms)
+    for n in (2, 8):
+        entry = measured[f"members/{n}"]
+        assert entry["devices_used"] == n and entry["steps"] == one["steps"], (n, entry)
+        assert entry["differs"] == [] and entry["summaries"] == one["summaries"], (n, entry)
+        kinds = entry["collectives"]
+        assert set(kinds) <= {"all-reduce"}, (n, kinds)  # no halo, gather or reshuffle of member data
+        assert all(shape.startswith("pred[]") for shape in kinds.get("all-reduce", [])), (n, kinds)
+    for n in (4, 1):
+        assert measured[f"restart/{n}"] == {"differs": [], "devices_used": n}, measured[f"restart/{n}"]
+    assert "numerics.devices = 3" in measured["three_for_eight"] and "8 member(s)" in measured["three_for_eight"]
+    assert "numerics.devices = 2" in measured["two_for_one"] and "1 member(s)" in measured["two_for_one"]

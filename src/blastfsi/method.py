@@ -17,7 +17,8 @@ one method, advanced together by ``jit(vmap(advance))``):
    ``params(setup, dtype)``, ``static(setup, sc)``; states and params are stacked
    along a new leading axis, the static configuration must be equal for all members;
 3. ``advance(state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction)``
-   in compiled chunks, written with :func:`blastfsi.timeloop.run_until`;
+   in compiled chunks, written with :func:`blastfsi.timeloop.run_until` (a static with ``member_devices``
+   n > 1 spreads the members over n devices, :func:`compiled_advance`);
 4. on the host between chunks and at the end, per member (arrays without the
    ensemble axis): ``snapshot``, ``locate_fault`` (after a fault), ``summary``; the pool of a
    :class:`GrowingPool` is enlarged when full and packed into fewer slots when mostly empty (``pool_needed``,
@@ -36,7 +37,7 @@ import jax
 import numpy as np
 from pydantic import BaseModel
 
-from blastfsi import runtime
+from blastfsi import runtime, xla
 from blastfsi.timeloop import CLOCK_FIELDS
 
 if TYPE_CHECKING:  # annotations only: blastfsi.scenario imports this registry (parse looks a method's model up)
@@ -267,7 +268,9 @@ _EXECUTABLES: dict = {}  # (method, static, argument types) -> compiled jit(vmap
 def compiled_advance(method: Method, static, state, params, *scalars):
     """The compiled batched ``advance`` of ``method`` (states and params with a leading member axis; the
     scalars ``t_stop, max_steps, sample_interval, dt_floor_fraction``) for these argument types, and the
-    seconds spent compiling it now (0 when it was compiled before in this process). Traced and lowered
+    seconds spent compiling it now (0 when it was compiled before in this process). A ``static`` with
+    ``member_devices`` n > 1 (lagrangian1d's numerics.devices) spreads the members over n devices in equal
+    shares: every leaf is split along its member axis, so each device advances its members alone. Traced and lowered
     through :func:`blastfsi.runtime.lowered` (kept in the persistent cache inside a run)."""
     leaves, tree = jax.tree_util.tree_flatten((state, params))
     key = (method.name, static, tree, tuple(jax.typeof(x) for x in leaves), tuple(type(s) for s in scalars),
@@ -287,6 +290,16 @@ def compiled_advance(method: Method, static, state, params, *scalars):
 
     members = leaves[0].shape[0]
     batched = single if members == 1 else jax.vmap(one, in_axes=(0, 0, None, None, None, None))
+    parts = getattr(static, "member_devices", 1)
+    if parts > 1:  # the members spread over devices in equal shares, each member's arrays whole on its device
+        def split(tree):
+            return jax.tree_util.tree_map(
+                lambda a: jax.lax.with_sharding_constraint(a, xla.split_sharding(parts, a.ndim)), tree)
+
+        whole = batched
+
+        def batched(st, pa, *rest):
+            return split(whole(split(st), split(pa), *rest))
     started = wallclock.perf_counter()
     _EXECUTABLES[key] = runtime.lowered(batched, (state, params, *scalars), ("advance", method.name, static, members),
                                         donate_argnums=(0,)).compile()

@@ -334,11 +334,20 @@ def prepare(sc: ScenarioBase, member_scs: list, stage=lambda message: None):
     if len(statics) != 1:
         raise ScenarioError(f"all ensemble members must share the static configuration compiled into the time loop; "
                             f"got {sorted(map(repr, statics))}")
+    static = statics.pop()
+    parts = getattr(static, "member_devices", 1)  # (methods.compiled_advance spreads the members over them)
+    if len(member_scs) % parts:
+        asked = sc.numerics.devices
+        raise ScenarioError(f"numerics.devices = {asked!r}{f' is {parts} devices here' if asked == 'all' else ''}: "
+                            f"the members of an ensemble (a [sweep], or a list of scenarios) are spread over the "
+                            f"devices in equal shares, and this run has {len(member_scs)} member(s); give a member "
+                            f"count that is a multiple of {parts}, or numerics.devices a divisor of "
+                            f"{len(member_scs)}")
     n_samples = sc.output.history_samples
     state = _stack([method.initial_state(setup, s, n_samples, dtype) for setup, s in zip(setups, member_scs)], "state")
     methods.check_state(state)
     params = _stack([method.params(setup, dtype) for setup in setups], "params")
-    return method, setups, statics.pop(), state, params
+    return method, setups, static, state, params
 
 
 def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path | None, out: Path | None, *,

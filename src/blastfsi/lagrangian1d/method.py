@@ -18,6 +18,7 @@ from blastfsi.lagrangian1d import scheme
 from blastfsi.lagrangian1d.scenario import Scenario
 from blastfsi.materials import lookup
 from blastfsi.method import Polyline, register
+from blastfsi.scenario import device_count
 
 # blastfsi.plotting (matplotlib) is imported inside the plotting functions only: it loads when plots are drawn.
 
@@ -61,7 +62,7 @@ class Lagrangian1D:
                              afterburn=_optional(scheme.Afterburn, setup, "afterburn", dtype))
 
     def static(self, setup, sc: Scenario) -> scheme.Static:
-        return scheme.Static(setup.left_velocity_set, setup.right_fixed, _geometry(setup))
+        return scheme.Static(setup.left_velocity_set, setup.right_fixed, _geometry(setup), member_devices(sc))
 
     def advance(self, state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction):
         return scheme.advance(state, params, static, t_stop, max_steps, sample_interval, dt_floor_fraction)
@@ -149,6 +150,12 @@ class Lagrangian1D:
         plate_histories(folder / "plate_histories.png", histories, members)
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
+
+
+def member_devices(sc: Scenario) -> int:
+    """numerics.devices as a number of devices (ScenarioError naming the key where JAX sees fewer): the
+    ensemble's members are spread over them (the driver checks that they divide the members)."""
+    return device_count(sc.numerics.devices)
 
 
 def burn_front_pressure(setup, state: scheme.State) -> float:

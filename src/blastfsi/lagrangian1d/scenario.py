@@ -18,7 +18,7 @@ from pydantic import Field, model_validator
 from blastfsi.lagrangian1d.charge_problem import GEOMETRY, charge_radius, explosive
 from blastfsi.scenario import Numerics as SharedNumerics
 from blastfsi.scenario import Output as SharedOutput
-from blastfsi.scenario import Demand, ScenarioBase, Strict, Sweep as SharedSweep, gauge_points
+from blastfsi.scenario import Demand, Devices, ScenarioBase, Strict, Sweep as SharedSweep, gauge_points
 
 
 # Ambient air of 002 Sec. 3 (ERRATA 002-7): p0 = 1.048 bar, rho0 = 1.225 kg/m^3, gamma = 1.4.
@@ -156,6 +156,11 @@ class Numerics(SharedNumerics):
     K1: float = Field(1.5, ge=0.0, le=5.0, description="quadratic viscosity coefficient, Eq. (5)")
     K2: float = Field(0.1, ge=0.0, le=2.0, description="linear viscosity coefficient, Eq. (5)")
     cfl: float = Field(0.5, gt=0.0, le=1.0, description="time-step factor alpha, Eq. (20)")
+    devices: Devices = Field(1, description=(
+        "devices (GPUs of this machine; an integer >= 1) the members of a [sweep] are spread over, in equal "
+        "shares (the member count divisible by it); each member's chain stays whole on one device (10^3-10^5 "
+        "zones: splitting it would only add an exchange to every step); 'all': every device JAX sees. "
+        "Results equal one device's"))
 
 
 # Numbers per zone the compiled vNR loop holds (state and the step's temporaries); XLA's memory analysis of

@@ -138,11 +138,13 @@ class Params(NamedTuple):
 
 
 class Static(NamedTuple):
-    """Boundary kinds and geometry exponent, fixed at compile time (see :class:`Boundaries`)."""
+    """Boundary kinds and geometry exponent, fixed at compile time (see :class:`Boundaries`); the devices an
+    ensemble's members are spread over (:func:`blastfsi.method.compiled_advance`)."""
 
     left_velocity_set: bool
     right_fixed: bool
     geometry: int = 0  # j: 0 planar, 1 cylindrical, 2 spherical
+    member_devices: int = 1
 
 
 class State(NamedTuple):
