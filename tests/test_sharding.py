@@ -102,7 +102,8 @@ SCRIPT = textwrap.dedent('''
                      "U": np.asarray(res.state.U)}
             v, c = np.asarray(P.v)[0][on], float(np.max(np.asarray(P.wave_speed)[0][on]))
             entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"],
-                     "pool": int(on.size), "active": int(on.sum())}
+                     "pool": int(on.size), "active": int(on.sum()), "nodes": res.setups[0].grid.num_nodes,
+                     "cells": int(np.prod(res.setups[0].grid.cells))}
             if ref is None:
                 ref = (state, res.summary["steps"], v, c)
             else:  # velocities against the sound speed (a gas at rest has round-off velocities only)
@@ -211,7 +212,8 @@ SCRIPT = textwrap.dedent('''
         on = np.asarray(P.active)
         state = {"x": np.asarray(P.x)[on], "v": np.asarray(P.v)[on], "stress": np.asarray(P.point.stress)[on],
                  "plastic_strain": np.asarray(P.point.plastic_strain)[on]}
-        entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"], "pool": int(on.size)}
+        entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"], "pool": int(on.size),
+                 "nodes": res.setups[0].grid.num_nodes}
         if ref is None:
             ref = (state, res.summary["steps"])
         else:
@@ -220,6 +222,29 @@ SCRIPT = textwrap.dedent('''
             exe = list(methods._EXECUTABLES.values())[-1]
             entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
         report[f"mpm/{n}"] = entry
+
+    # MPM in 1D (the gas of mpm-sod) and 3D (a quarter of the Taylor rod, symmetry planes x = 0 and y = 0):
+    # the pool split over 2 devices
+    rod = copy.deepcopy(bar)
+    rod["grid"] = {"lower": [0.0, 0.0, 0.0], "upper": [7.62e-3, 7.62e-3, 26.67e-3], "cells": 6,
+                   "boundaries": {"x": ["slip", "free"], "y": ["slip", "free"], "z": ["slip", "free"]}}
+    rod["impactor"]["particles_per_cell"] = 2
+    rod["output"]["tracers"] = [[0.0, 0.0, 25.4e-3]]
+    sod = example("mpm-sod", **{"time.end": 1e-5, "output.fields": 0, "output.plots": False})
+    for label, data in (("mpm1d", sod), ("mpm3d", rod)):
+        ref = None
+        for n in (1, 2):
+            res = simulation.run(with_devices(data, n))
+            P = res.state.mpm.particles
+            on = np.asarray(P.active)
+            state = {"x": np.asarray(P.x)[on], "v": np.asarray(P.v)[on], "stress": np.asarray(P.point.stress)[on]}
+            entry = {"devices_used": len(P.x.sharding.device_set), "steps": res.summary["steps"],
+                     "particles": int(on.sum())}
+            if ref is None:
+                ref = (state, res.summary["steps"])
+            else:
+                entry.update(fields=worst(ref[0], state), steps_ref=ref[1])
+        report[f"{label}/2"] = entry
 
     # a checkpoint written on 2 devices, continued on 4 and on 1 (host arrays: the layout is the run's)
     out = pathlib.Path(sys.argv[1]) / "a"
@@ -259,8 +284,11 @@ def _check_cfdmp_split(entry, gas_particles: int):
     assert entry["devices_used"] == 2 and entry["steps"] == entry["steps_ref"], entry
     assert entry["active"] > gas_particles, entry  # the coupling started: the box's gas is particles
     assert max(entry["fields"].values()) <= RELATIVE_MPM, entry["fields"]
+    # the all-reduces: the nodal and per-cell sums (a channel each, or rows of all channels: multiples of the MPM
+    # grid's nodes or cells) and short ones (the emission batch's slot ranks, scalars); no pool-sized gather
     hlo = entry["hlo"]
-    assert hlo["all-reduce"] and max(hlo["all-reduce"]) < entry["pool"], hlo
+    assert hlo["all-reduce"] and all(size < 1000 or size % entry["nodes"] == 0 or size % entry["cells"] == 0
+                                     for size in hlo["all-reduce"]), (sorted(set(hlo["all-reduce"])), entry)
     assert all(size < entry["pool"] for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo
 
 
@@ -319,7 +347,7 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
       1D grid before boundaries.extend_coefficient selected it instead);
     * a checkpoint written on 2 devices continues on 4 and on 1 with the uninterrupted run's steps and fields;
     * MPM (taylor-bar, 4 us): the particle pool split over 2 and 8 devices gives the one-device run's particles
-      and steps to round-off; a pool of 6001 slots is rounded up to 6008 on 8; the compiled loop adds the nodal
+      and steps to round-off, as it does on 2 devices in 1D (mpm-sod) and 3D (a quarter of the Taylor rod); a pool of 6001 slots is rounded up to 6008 on 8; the compiled loop adds the nodal
       sums across devices (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
       a checkpoint written on 2 devices continues on 1;
     * 3D (sedov-3d, 16^3, 2 devices): the split grid gives the one-device run to round-off and exchanges halos;
@@ -349,11 +377,17 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
         entry = measured[f"mpm/{n}"]
         assert entry["devices_used"] == n and entry["steps"] == entry["steps_ref"], (n, entry)
         assert max(entry["fields"].values()) <= RELATIVE_MPM, (n, entry["fields"])
+    for case in ("mpm1d/2", "mpm3d/2"):  # MPM in 1D and 3D: the pool split over 2 devices
+        entry = measured[case]
+        assert entry["devices_used"] == 2 and entry["steps"] == entry["steps_ref"] and entry["particles"] > 500, entry
+        assert max(entry["fields"].values()) <= RELATIVE_MPM, (case, entry["fields"])
     assert measured["mpm/8"]["pool"] == 6008  # numerics.capacity 6001 rounded up to equal parts
     hlo = measured["mpm/2"]["hlo"]
-    pool = measured["mpm/2"]["pool"]
-    assert hlo["all-reduce"] and max(hlo["all-reduce"]) < pool, hlo  # the nodal sums, added across devices
-    assert all(size < pool for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo  # particles stay put
+    pool, nodes = measured["mpm/2"]["pool"], measured["mpm/2"]["nodes"]
+    # the nodal sums, added across devices: node-sized arrays (a channel each, or rows of all channels), not the
+    # pool's; and no array of the pool's particles is gathered or exchanged (they stay on their device)
+    assert hlo["all-reduce"] and all(size < 100 or size % nodes == 0 for size in hlo["all-reduce"]), (hlo, nodes)
+    assert all(size < pool for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo
     entry = measured["mpm_restart"]
     assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
     message = measured["too_many"]

@@ -343,9 +343,10 @@ def particle_to_grid(idx, channels, num_nodes: int, combined: bool):
     of additions as one scatter of all S n values: bit for bit the same sums).
     """
     dtype = channels[0].dtype
-    if combined:
-        packed = jnp.stack(channels, axis=-1).reshape(-1, len(channels))
-        return jnp.zeros((num_nodes, len(channels)), dtype).at[idx.reshape(-1)].add(packed)
+    if combined:  # (indexed by the (S, n) stencil itself, not a flattened copy: a pool split over devices along
+        #          n stays split, and each device's partial sums are added across them; flattening S n made
+        #          the partitioner gather the whole pool's rows)
+        return jnp.zeros((num_nodes, len(channels)), dtype).at[idx].add(jnp.stack(channels, axis=-1))
 
     def scatter(c):
         acc = jnp.zeros(num_nodes, dtype)
