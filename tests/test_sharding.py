@@ -347,8 +347,9 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
       1D grid before boundaries.extend_coefficient selected it instead);
     * a checkpoint written on 2 devices continues on 4 and on 1 with the uninterrupted run's steps and fields;
     * MPM (taylor-bar, 4 us): the particle pool split over 2 and 8 devices gives the one-device run's particles
-      and steps to round-off, as it does on 2 devices in 1D (mpm-sod) and 3D (a quarter of the Taylor rod); a pool of 6001 slots is rounded up to 6008 on 8; the compiled loop adds the nodal
-      sums across devices (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
+      and steps to round-off, as it does on 2 devices in 1D (mpm-sod) and 3D (a quarter of the Taylor rod); a
+      pool of 6001 slots is rounded up to 6008 on 8; the compiled loop adds the nodal sums across devices
+      (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
       a checkpoint written on 2 devices continues on 1;
     * 3D (sedov-3d, 16^3, 2 devices): the split grid gives the one-device run to round-off and exchanges halos;
     * cfdmp, and snapshots written on 2 devices: test_coupled_split_and_snapshots_on_two_virtual_devices (slow);

@@ -270,8 +270,8 @@ def compiled_advance(method: Method, static, state, params, *scalars):
     scalars ``t_stop, max_steps, sample_interval, dt_floor_fraction``) for these argument types, and the
     seconds spent compiling it now (0 when it was compiled before in this process). A ``static`` with
     ``member_devices`` n > 1 (lagrangian1d's numerics.devices) spreads the members over n devices in equal
-    shares: every leaf is split along its member axis, so each device advances its members alone. Traced and lowered
-    through :func:`blastfsi.runtime.lowered` (kept in the persistent cache inside a run)."""
+    shares: every leaf is split along its member axis, so each device advances its members alone. Traced and
+    lowered through :func:`blastfsi.runtime.lowered` (kept in the persistent cache inside a run)."""
     leaves, tree = jax.tree_util.tree_flatten((state, params))
     key = (method.name, static, tree, tuple(jax.typeof(x) for x in leaves), tuple(type(s) for s in scalars),
            jax.config.jax_enable_x64)  # (the scalars' compiled types)
