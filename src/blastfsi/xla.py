@@ -36,7 +36,8 @@ def combined_scatter(dim: int) -> bool:
     he-slab-2d compiles in 18.3 s with rows against 23.4 s with scalars, steel-plate-blast in 15.0 s
     against 22.1 s and concrete-slab-blast in 16.3-16.5 s against 22.7-22.9 s; the loops take the same time
     (he-slab-2d 17.2 s, steel-plate-blast 32.6 s, the 2D MPM taylor-bar 4.9 s) or up to 5 % longer
-    (concrete-slab-blast to 0.12 ms, two pairs of runs: 41.3 and 43.1 s against 38.8 and 41.2 s). In 3D
+    (concrete-slab-blast to 0.12 ms, two pairs of runs: 41.3 and 43.1 s against 38.8 and 41.2 s;
+    tnt-standoff-plate to 1.6 ms: 73.2 against 70.9 s, compiled in 16.9 against 23.3 s). In 3D
     (27 stencil nodes) XLA:CPU's generic per-element loop over rows costs more than it saves: the Johnson-Cook
     block of ``benchmarks/bench_mpm.py`` (24^3 cells, 110 592 particles) steps
     2.09e6 particle-steps/s with scalars against 1.81e6 with rows."""
