@@ -262,6 +262,12 @@ def check_state(state) -> None:
         raise TypeError(f"a method state must be a NamedTuple with the clock fields {CLOCK_FIELDS}; missing {missing}")
 
 
+def member_devices(static) -> int:
+    """The devices a method's static configuration spreads an ensemble's members over: its ``member_devices``
+    (lagrangian1d's numerics.devices), else 1 (a method that splits its own arrays, or one device)."""
+    return getattr(static, "member_devices", 1)
+
+
 _EXECUTABLES: dict = {}  # (method, static, argument types) -> compiled jit(vmap(advance)), or jit(advance) for one member
 
 
@@ -290,7 +296,7 @@ def compiled_advance(method: Method, static, state, params, *scalars):
 
     members = leaves[0].shape[0]
     batched = single if members == 1 else jax.vmap(one, in_axes=(0, 0, None, None, None, None))
-    parts = getattr(static, "member_devices", 1)
+    parts = member_devices(static)
     if parts > 1:  # the members spread over devices in equal shares, each member's arrays whole on its device
         def split(tree):
             return jax.tree_util.tree_map(

@@ -335,7 +335,7 @@ def prepare(sc: ScenarioBase, member_scs: list, stage=lambda message: None):
         raise ScenarioError(f"all ensemble members must share the static configuration compiled into the time loop; "
                             f"got {sorted(map(repr, statics))}")
     static = statics.pop()
-    parts = getattr(static, "member_devices", 1)  # (methods.compiled_advance spreads the members over them)
+    parts = methods.member_devices(static)  # (methods.compiled_advance spreads the members over them)
     if len(member_scs) % parts:
         asked = sc.numerics.devices
         raise ScenarioError(f"numerics.devices = {asked!r}{f' is {parts} devices here' if asked == 'all' else ''}: "
