@@ -92,9 +92,9 @@ SCRIPT = textwrap.dedent('''
         return {"permutes": op_sizes(exe, "collective-permute"), "gathers": op_sizes(exe, "all-gather"),
                 "all_to_all": len(op_sizes(exe, "all-to-all")), "cells": cells, "plane": planes}
 
-    def cfdmp_split(data):  # one and two devices: the particles and the grid, the compiled loop's collectives
+    def cfdmp_split(data, label, counts=(1, 2)):  # particles and grid against one device's; the loop's collectives
         out, ref = {}, None
-        for n in (1, 2):
+        for n in counts:
             res = simulation.run(with_devices(data, n))
             P = res.state.mpm.particles
             on = np.asarray(P.active)[0]
@@ -111,7 +111,7 @@ SCRIPT = textwrap.dedent('''
                              steps_ref=ref[1])
                 exe = list(methods._EXECUTABLES.values())[-1]
                 entry["hlo"] = {op: op_sizes(exe, op) for op in ("all-reduce", "all-gather", "all-to-all")}
-            out[f"cfdmp/{n}"] = entry
+            out[f"{label}/{n}"] = entry
         return out
 
     report = {"visible": len(jax.devices())}
@@ -121,11 +121,21 @@ SCRIPT = textwrap.dedent('''
 
     if sys.argv[2:] == ["slow"]:
         # he-slab-2d to 12 steps after the coupling starts
-        report["he-slab-2d"] = cfdmp_split(example("he-slab-2d", **{"time.end": 1.62e-5, "output.fields": 0,
-                                                                   "output.plots": False}))["cfdmp/2"]
+        report.update(cfdmp_split(example("he-slab-2d", **{"time.end": 1.62e-5, "output.fields": 0,
+                                                          "output.plots": False}), "he-slab-2d"))
         # the same with the shock tube to 0.1 ms, and its checkpoint continued on another count
         report.update(cfdmp_split(example("cfdmp-shock-tube", **{"time.end": 1e-4, "output.fields": 0,
-                                                                 "output.plots": False})))
+                                                                 "output.plots": False}), "cfdmp", (1, 2, 4, 8)))
+        # in 3D: a Sod shock entering an MPM box that holds a steel block (15 mm cells, 2-cell bridge), to 14 us
+        # after the shock reaches the box (the coupling's particles emitted on every device)
+        report.update(cfdmp_split({
+            "method": "cfdmp", "name": "cfdmp-3d", "grid": {"cells": 16},
+            "domain": {"lower": [0.0, 0.0, 0.0], "upper": [0.24, 0.12, 0.12]},
+            "initial": {"kind": "riemann", "diaphragm": 0.1, "left": {"density": 1.0, "pressure": 1.0e5},
+                        "right": {"density": 0.125, "pressure": 1.0e4}},
+            "mpm_region": {"lower": [0.12, 0.0, 0.0], "upper": [0.24, 0.12, 0.12], "bridge_cells": 2},
+            "structures": [{"lower": [0.21, 0.03, 0.03], "upper": [0.24, 0.09, 0.09], "material": "elastic-steel"}],
+            "time": {"end": 5e-5}, "output": {"fields": 0, "plots": False}}, "cfdmp-3d", (1, 2, 4, 8)))
 
         # a cfdmp checkpoint written on 2 devices, continued on 1 (the shock tube's pool, 302 slots, divides into both)
         out = pathlib.Path(sys.argv[1]) / "tube"
@@ -178,12 +188,12 @@ SCRIPT = textwrap.dedent('''
         sys.exit(0)
 
     cases = {
-        "sedov-2d": (sedov, (1, 2, 8), 32 * 32, 32),
+        "sedov-2d": (sedov, (1, 2, 4, 8), 32 * 32, 32),
         "sod": (example("sod", **{"grid.cells": 64, "output.fields": 0, "output.plots": False,
-                                  "output.gauges": [0.3e-3, 0.75e-3]}), (1, 4), 64, 1),
+                                  "output.gauges": [0.3e-3, 0.75e-3]}), (1, 2, 4, 8), 64, 1),
         "sedov-3d": (example("sedov-3d", **{"grid.cells": 16, "time.end": 0.1, "output.fields": 0,
                                              "output.plots": False, "output.gauges": [[0.45, 0.0, 0.0]]}),
-                     (1, 2), 16 ** 3, 16 * 16),
+                     (1, 2, 4, 8), 16 ** 3, 16 * 16),
     }
     for name, (data, counts, cells, plane) in cases.items():
         ref = None
@@ -196,14 +206,13 @@ SCRIPT = textwrap.dedent('''
             else:
                 entry.update(fields=worst(ref[0], f), gauges=gauge_diff(ref[1], s, ref[0], data["time"]["end"]),
                              steps_ref=ref[1]["steps"], gauge_values=[ref[1]["gauges"], s["gauges"]])
-            if n == counts[1]:
                 exe = list(methods._EXECUTABLES.values())[-1]  # (compiled by this run: its shapes are new)
                 entry["hlo"] = hlo_facts(exe, cells, plane)
             report[f"{name}/{n}"] = entry
 
-    # MPM: the particle pool split over 2 and 8 devices (8: a pool of 6001 slots rounded up to 6008)
+    # MPM: the particle pool split over 2, 4 and 8 devices (8: a pool of 6001 slots rounded up to 6008)
     ref = None
-    for n, capacity in ((1, None), (2, None), (8, 6001)):
+    for n, capacity in ((1, None), (2, None), (4, None), (8, 6001)):
         data = with_devices(bar, n)
         if capacity:
             data["numerics"]["capacity"] = capacity
@@ -224,7 +233,7 @@ SCRIPT = textwrap.dedent('''
         report[f"mpm/{n}"] = entry
 
     # MPM in 1D (the gas of mpm-sod) and 3D (a quarter of the Taylor rod, symmetry planes x = 0 and y = 0):
-    # the pool split over 2 devices
+    # the pool split over 2, 4 and 8 devices
     rod = copy.deepcopy(bar)
     rod["grid"] = {"lower": [0.0, 0.0, 0.0], "upper": [7.62e-3, 7.62e-3, 26.67e-3], "cells": 6,
                    "boundaries": {"x": ["slip", "free"], "y": ["slip", "free"], "z": ["slip", "free"]}}
@@ -233,7 +242,7 @@ SCRIPT = textwrap.dedent('''
     sod = example("mpm-sod", **{"time.end": 1e-5, "output.fields": 0, "output.plots": False})
     for label, data in (("mpm1d", sod), ("mpm3d", rod)):
         ref = None
-        for n in (1, 2):
+        for n in (1, 2, 4, 8):
             res = simulation.run(with_devices(data, n))
             P = res.state.mpm.particles
             on = np.asarray(P.active)
@@ -244,7 +253,7 @@ SCRIPT = textwrap.dedent('''
                 ref = (state, res.summary["steps"])
             else:
                 entry.update(fields=worst(ref[0], state), steps_ref=ref[1])
-        report[f"{label}/2"] = entry
+            report[f"{label}/{n}"] = entry
 
     # a checkpoint written on 2 devices, continued on 4 and on 1 (host arrays: the layout is the run's)
     out = pathlib.Path(sys.argv[1]) / "a"
@@ -278,10 +287,10 @@ SCRIPT = textwrap.dedent('''
 ''')
 
 
-def _check_cfdmp_split(entry, gas_particles: int):
-    """cfdmp on 2 devices against 1: the pool split, the particles and the grid to round-off, the compiled loop
-    adding the nodal and per-cell sums across devices and gathering no pool-sized array."""
-    assert entry["devices_used"] == 2 and entry["steps"] == entry["steps_ref"], entry
+def _check_cfdmp_split(entry, devices: int, gas_particles: int):
+    """cfdmp on ``devices`` devices against 1: the pool split, the particles and the grid to round-off, the
+    compiled loop adding the nodal and per-cell sums across devices and gathering no pool-sized array."""
+    assert entry["devices_used"] == devices and entry["steps"] == entry["steps_ref"], entry
     assert entry["active"] > gas_particles, entry  # the coupling started: the box's gas is particles
     assert max(entry["fields"].values()) <= RELATIVE_MPM, entry["fields"]
     # the all-reduces: the nodal and per-cell sums (a channel each, or rows of all channels: multiples of the MPM
@@ -292,11 +301,12 @@ def _check_cfdmp_split(entry, gas_particles: int):
     assert all(size < entry["pool"] for size in hlo["all-gather"]) and not hlo["all-to-all"], hlo
 
 
-@pytest.mark.slow  # ~1 min alone, ~2 min beside another test worker on 2 cores
+@pytest.mark.slow  # ~7 min alone on 2 cores
 def test_coupled_split_and_snapshots_on_two_virtual_devices(tmp_path):
     """cfdmp with the MPM region's pool split over 2 devices, the Eulerian grid whole on each:
 
-    * he-slab-2d (2D) and cfdmp-shock-tube (1D, to 0.1 ms): the one-device run's particles and grid to round-off;
+    * he-slab-2d (2D), cfdmp-shock-tube (1D, to 0.1 ms) and a Sod shock entering a 3D box with a steel block
+      (test_cfdmp's 3D case on 15 mm cells): the one-device run's particles and grid to round-off;
       the compiled loop adds the nodal and per-cell sums across devices and gathers no pool-sized array
       (particles are emitted into free slots ranked per device, mpm.add_particles_at: one cumsum over the pool
       made the shock tube's loop all-gather its slot ranks). he-slab-2d is held to round-off for 12 steps after
@@ -308,8 +318,10 @@ def test_coupled_split_and_snapshots_on_two_virtual_devices(tmp_path):
     * snapshots written on 2 devices are the one-device run's files (names, HDF5 datasets with their shapes
       and dtypes, XDMF text) with values to round-off, for a grid (sedov-2d) and for particles (taylor-bar)."""
     measured = _split_runs(tmp_path, "slow")
-    _check_cfdmp_split(measured["he-slab-2d"], gas_particles=20000)
-    _check_cfdmp_split(measured["cfdmp/2"], gas_particles=100)
+    _check_cfdmp_split(measured["he-slab-2d/2"], 2, gas_particles=20000)
+    for n in (2, 4, 8):
+        _check_cfdmp_split(measured[f"cfdmp/{n}"], n, gas_particles=100)
+        _check_cfdmp_split(measured[f"cfdmp-3d/{n}"], n, gas_particles=4160)  # (4160 before the shock reaches the box)
     entry = measured["cfdmp_restart"]
     assert entry["steps"][0] == entry["steps"][1] and max(entry["fields"].values()) <= RELATIVE_MPM, entry
     for label in ("grid", "particles"):  # snapshots written on 2 devices: the one-device files, layout and values
@@ -326,37 +338,38 @@ def _split_runs(folder, *args):
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=8", "JAX_PLATFORMS": "cpu",
            "BLASTFSI_NO_CACHE": "1"}
     proc = subprocess.run([sys.executable, str(script), str(folder), *args], capture_output=True, text=True,
-                          env=env, timeout=600)
+                          env=env, timeout=1500)
     assert proc.returncode == 0, proc.stderr[-4000:]
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("REPORT"))
     return json.loads(line[len("REPORT"):])
 
 
-@pytest.mark.slow  # default-suite time (77 s on 2 cores, the suite at 536-619 s): the device checks below stay
+@pytest.mark.slow  # default-suite time (131 s on 2 cores): the device checks below stay
 def test_split_runs_on_eight_virtual_devices(tmp_path):
     """One subprocess with 8 virtual CPU devices runs every split case (one test, so that one worker pays
     for it):
 
-    * the split grid gives the one-device run's fields, gauges and steps to round-off (2 and 8 devices in 2D,
-      4 in 1D), and the final state lies on N devices; a one-device run is not split;
-    * the split loop's optimised HLO (2 devices in 2D, 4 in 1D): the stencils' neighbour cells come from
+    * the split grid gives the one-device run's fields, gauges and steps to round-off on 2, 4 and 8 devices in
+      1D (sod), 2D (sedov-2d) and 3D (sedov-3d, 16^3), and the final state lies on N devices; a one-device run
+      is not split;
+    * the split loop's optimised HLO (each of those runs): the stencils' neighbour cells come from
       collective permutes of a few planes of cells (the halo: at most 2 ghost planes per side, of at most 8
       rows), and no all-gather or all-to-all moves a grid-sized array. The one-device-shaped program would
       instead need every device to see the whole grid; a partitioner that fell back to gathering would show
       up here as an all-gather of the grid's cell count (as it did for a concatenated zero ghost cell on a
       1D grid before boundaries.extend_coefficient selected it instead);
     * a checkpoint written on 2 devices continues on 4 and on 1 with the uninterrupted run's steps and fields;
-    * MPM (taylor-bar, 4 us): the particle pool split over 2 and 8 devices gives the one-device run's particles
-      and steps to round-off, as it does on 2 devices in 1D (mpm-sod) and 3D (a quarter of the Taylor rod); a
+    * MPM (taylor-bar, 4 us): the particle pool split over 2, 4 and 8 devices gives the one-device run's
+      particles and steps to round-off, as it does in 1D (mpm-sod) and 3D (a quarter of the Taylor rod); a
       pool of 6001 slots is rounded up to 6008 on 8; the compiled loop adds the nodal sums across devices
       (all-reduces of node-sized arrays) and moves no pool-sized array between devices;
       a checkpoint written on 2 devices continues on 1;
-    * 3D (sedov-3d, 16^3, 2 devices): the split grid gives the one-device run to round-off and exchanges halos;
-    * cfdmp, and snapshots written on 2 devices: test_coupled_split_and_snapshots_on_two_virtual_devices (slow);
+    * cfdmp, and snapshots written on 2 devices: test_coupled_split_and_snapshots_on_two_virtual_devices;
     * more devices than visible, and "all" not dividing the cells, are refused naming the key."""
     measured = _split_runs(tmp_path)
     assert measured["visible"] == 8
-    for case in ("sedov-2d/2", "sedov-2d/8", "sod/4", "sedov-3d/2"):
+    split_grids = [f"{name}/{n}" for name in ("sod", "sedov-2d", "sedov-3d") for n in (2, 4, 8)]
+    for case in split_grids:
         entry = measured[case]
         assert entry["devices_used"] == int(case.split("/")[1]), case  # the final state really lies on N devices
         assert entry["steps"] == entry["steps_ref"], case
@@ -364,7 +377,7 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
         assert entry["gauges"] <= RELATIVE, case
         assert all(g["arrival_time"] is not None for g in entry["gauge_values"][0]), case  # the gauges saw the blast
     assert measured["sedov-2d/1"]["devices_used"] == 1
-    for case in ("sedov-2d/2", "sod/4", "sedov-3d/2"):
+    for case in split_grids:
         hlo = measured[case]["hlo"]
         assert hlo["permutes"], f"{case}: no collective-permute: the split loop exchanges no halos"
         assert max(hlo["permutes"]) <= 2 * 8 * hlo["plane"], case
@@ -374,13 +387,14 @@ def test_split_runs_on_eight_virtual_devices(tmp_path):
         entry = measured[f"restart/{n}"]
         assert entry["steps"][0] == entry["steps"][1], n
         assert max(entry["fields"].values()) <= RELATIVE, (n, entry["fields"])
-    for n in (2, 8):  # MPM: the pool split over the devices
+    for n in (2, 4, 8):  # MPM: the pool split over the devices
         entry = measured[f"mpm/{n}"]
         assert entry["devices_used"] == n and entry["steps"] == entry["steps_ref"], (n, entry)
         assert max(entry["fields"].values()) <= RELATIVE_MPM, (n, entry["fields"])
-    for case in ("mpm1d/2", "mpm3d/2"):  # MPM in 1D and 3D: the pool split over 2 devices
+    for case in (f"{label}/{n}" for label in ("mpm1d", "mpm3d") for n in (2, 4, 8)):  # MPM in 1D and 3D
         entry = measured[case]
-        assert entry["devices_used"] == 2 and entry["steps"] == entry["steps_ref"] and entry["particles"] > 500, entry
+        assert entry["devices_used"] == int(case.split("/")[1]) and entry["steps"] == entry["steps_ref"], entry
+        assert entry["particles"] > 500, entry
         assert max(entry["fields"].values()) <= RELATIVE_MPM, (case, entry["fields"])
     assert measured["mpm/8"]["pool"] == 6008  # numerics.capacity 6001 rounded up to equal parts
     hlo = measured["mpm/2"]["hlo"]
