@@ -9,6 +9,7 @@ driver. Small grids; the 1D configurations share one compiled time loop.
 """
 import json
 
+import jax
 import numpy as np
 import pytest
 
@@ -138,6 +139,21 @@ def test_shipped_shock_tube_error_stays_within_a_quarter_of_the_eulerian_one(tmp
     coupled, euler = shock_tube_and_its_eulerian_twin(
         tmp_path, {"output.plots": False, "output.fields": 3, "output.history_samples": 61})
     assert_l1_within_a_quarter_of_euler(coupled, euler, RiemannProblem((1.0, 0.0, 1e5), (0.125, 0.0, 1e4), x0=0.3))
+
+
+def test_a_collapsed_step_names_its_fastest_signal(shock):
+    """A run stopped on a collapsed step (no non-physical cell or particle) is located at its fastest signal
+    |u| + c: of the cells that set the step (Eulerian and bridge cells: region 0 and 1 of the fields) and of
+    the active particles; the message names the cell or particle, where it is and its state."""
+    coupled, _ = shock
+    member = jax.tree_util.tree_map(lambda a: np.asarray(a)[0], coupled.state)
+    message = coupled.method.locate_fault(member, coupled.setups[0])
+    f = coupled.fields()
+    cells = np.where(f["region"] < 2, f["sound_speed"] + np.abs(f["velocity"]), 0.0)
+    particles = np.asarray(member.mpm.particles.wave_speed) + np.abs(np.asarray(member.mpm.particles.v)[:, 0])
+    fastest = max(float(np.max(cells)), float(np.max(particles[np.asarray(member.mpm.particles.active)])))
+    assert message.startswith("fastest signal ") and " at x = " in message and "density" in message, message
+    assert float(message.split()[2]) == pytest.approx(fastest, rel=1e-3), message  # (printed to 4 digits)
 
 
 @pytest.mark.slow  # default-suite time (< 10 min on 2 cores)

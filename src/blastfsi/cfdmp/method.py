@@ -179,7 +179,7 @@ class Cfdmp:
         slots = None if setup.devices > 1 else tuple(
             (n_struct, setup.capacity) if k in setup.gas_material else (0, n_struct) for k in range(len(setup.models)))
         mcfg = mpm.make_config(setup.grid, setup.models, shape=c.shape_functions, model_slots=slots,
-                               prescribed=c.clamped,
+                               prescribed=c.clamped, prescribed_slots=None if slots is None else (0, n_struct),
                                blend=any(a > 0.0 for a in c.pic_fraction),
                                relax=relaxation.gas_materials(setup.models, c.pressure_relaxation))
         faces = tuple((f.axis, f.side, f.plane) for f in setup.faces)
@@ -466,7 +466,34 @@ class Cfdmp:
             x = np.asarray(state.mpm.particles.x)[k, :g.ndim]
             name = setup.materials[int(state.mpm.particles.material[k])]
             return f"particle {k} ({name}) at {x.tolist()} m (non-finite, non-positive density or off the grid)"
-        return "the time step collapsed (fastest signal in the Eulerian cells or the particles)"
+        return self._fastest_signal(state, setup, prm, cs)
+
+    @staticmethod
+    def _fastest_signal(state: State, setup: problem.Setup, prm: Params, cs) -> str:
+        """Where a collapsed step's fastest signal is: the Eulerian cell (fictitious cells excluded: they set no
+        step) or the active particle with the largest |u| + c, and its state."""
+        g = setup.euler.grid
+        prim = ek.primitives(jnp.asarray(state.U), prm.euler, cs.euler)
+        cell_speed = np.asarray(prim["sound_speed"]) + np.max(np.abs(np.asarray(prim["velocity"])), axis=0)
+        cell_speed = np.where(setup.fictitious, -np.inf, np.nan_to_num(cell_speed, nan=np.inf))
+        flat = int(np.argmax(cell_speed))
+        P = state.mpm.particles
+        part_speed = np.asarray(P.wave_speed) + np.linalg.norm(np.asarray(P.v), axis=1)
+        part_speed = np.where(np.asarray(P.active), part_speed, -np.inf)
+        k = int(np.argmax(part_speed))
+        axes = ("r", "z") if g.geometry == "axisymmetric" else AXES
+        if cell_speed.reshape(-1)[flat] >= part_speed[k]:
+            idx = np.unravel_index(flat, g.shape)
+            centre = ", ".join(f"{a} = {g.lower[d] + (i + 0.5) * g.dx:.6g} m"
+                               for d, (a, i) in enumerate(zip(axes, idx)))
+            state_of = {key: float(np.asarray(prim[key])[idx]) for key in ("rho", "pressure", "products_fraction")}
+            return (f"fastest signal {cell_speed[idx]:.4g} m/s in cell {tuple(int(i) for i in idx)} at {centre} "
+                    f"(density {state_of['rho']:.4g} kg/m^3, pressure {state_of['pressure']:.4g} Pa, products "
+                    f"mass fraction {state_of['products_fraction']:.3g})")
+        where = ", ".join(f"{a} = {float(c):.6g} m" for a, c in zip(axes, np.asarray(P.x)[k, :g.ndim]))
+        return (f"fastest signal {part_speed[k]:.4g} m/s in particle {k} ({setup.materials[int(P.material[k])]}) "
+                f"at {where} (density {float(P.point.density[k]):.4g} kg/m^3, specific internal energy "
+                f"{float(P.point.energy[k]):.4g} J/kg)")
 
     def summary(self, sc: CfdmpScenario, setup: problem.Setup, hist: dict, state: State) -> dict:
         e = setup.euler

@@ -165,6 +165,8 @@ class Config:
     #                                   (None: all): a model's update runs on those slots only
     relax: tuple = ()  # gas materials (fluid model) relaxed to a common pressure where they share nodes
     #                    (:mod:`blastfsi.mpm.relaxation`; empty: off)
+    prescribed_slots: tuple | None = None  # the pool slots (start, stop) holding every particle that can be
+    #                                        prescribed (None: all): the constraint channels are summed over these
 
 
 class Params(NamedTuple):
@@ -205,14 +207,16 @@ class NodalSource(NamedTuple):
 
 def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = False,
                 combined_scatter: bool | None = None, model_slots=None, blend: bool = False,
-                relax=()) -> Config:
+                relax=(), prescribed_slots=None) -> Config:
     """Checked :class:`Config`; ``combined_scatter`` defaults to the backend's
     choice (:func:`blastfsi.xla.combined_scatter`, see :func:`particle_to_grid`); ``model_slots``: per model the
     pool slots (start, stop) its particles can occupy, or None for all (a coupled run keeps
     the structures in the first slots and the gas after them: each model then runs on its
     own part of the pool only); ``blend``: some material will have a PIC share (without it, Params.pic_fraction
     is not read and the step is pure FLIP); ``relax``: two or more material indices of fluid-model gases
-    whose particles relax to a common pressure where they share nodes (:mod:`blastfsi.mpm.relaxation`)."""
+    whose particles relax to a common pressure where they share nodes (:mod:`blastfsi.mpm.relaxation`);
+    ``prescribed_slots``: the pool slots (start, stop) outside which no particle is ever prescribed (a coupled
+    run's structures, in the first slots), or None for all."""
     if shape not in SHAPES:
         raise MPMError(f"numerics.shape: expected one of {tuple(SHAPES)}, got {shape!r}")
     models = tuple(models)
@@ -225,12 +229,18 @@ def make_config(grid: Grid, models, shape: str = "linear", prescribed: bool = Fa
         if len(model_slots) != len(models) or any(not 0 <= a <= b for a, b in model_slots):
             raise MPMError(f"model_slots: expected one (start, stop) with 0 <= start <= stop per model, "
                            f"got {model_slots!r}")
+    if prescribed_slots is not None:
+        prescribed_slots = (int(prescribed_slots[0]), int(prescribed_slots[1]))
+        if not 0 <= prescribed_slots[0] <= prescribed_slots[1]:
+            raise MPMError(f"prescribed_slots: expected (start, stop) with 0 <= start <= stop, "
+                           f"got {prescribed_slots!r}")
     relax = tuple(int(k) for k in relax)
     if relax and (len(relax) < 2 or len(set(relax)) < len(relax)
                   or any(not 0 <= k < len(models) or models[k].name != "fluid" for k in relax)):
         raise MPMError(f"relax: expected two or more distinct material indices of fluid-model gases, got {relax!r}")
     return Config(grid=grid, shape=SHAPES[shape], models=models, prescribed=bool(prescribed),
-                  combined_scatter=bool(combined_scatter), model_slots=model_slots, blend=bool(blend), relax=relax)
+                  combined_scatter=bool(combined_scatter), model_slots=model_slots, blend=bool(blend), relax=relax,
+                  prescribed_slots=prescribed_slots)
 
 
 def make_params(materials, *, cfl=0.5, q_quadratic=DEFAULT_QUADRATIC, q_linear=DEFAULT_LINEAR,
@@ -547,9 +557,8 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
         forces.append(f)
     mw = m * w
     channels = [mw] + [mw * P.v[:, i] for i in range(d)] + forces
-    if config.prescribed:  # per component, the mass and momentum of the particles prescribing it
-        mwp = [jnp.where(P.prescribed[:, i], mw, 0.0) for i in range(d)]
-        channels += mwp + [mwp[i] * P.prescribed_velocity[:, i] for i in range(d)]
+    if config.prescribed and config.prescribed_slots is None:  # the constraint channels of the whole pool
+        channels += _prescribed_channels(P, mw, slice(None), d)
     blend_at = len(channels)
     if config.blend:  # the alpha-weighted nodal mass and momentum of the blend heat (step 3)
         alpha = params.pic_fraction[jnp.clip(P.material, 0, len(config.models) - 1)]
@@ -568,8 +577,7 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     if source is not None:  # Eqs. (37)-(39)
         m_I, p_I, f_I = m_I + source.mass, p_I + source.momentum, f_I + source.force
     f_I = f_I + m_I[:, None] * params.gravity[:d]  # Eq. (23), body force of Eq. (20)
-    m_fix, p_fix = ((nodal[:, 1 + 2 * d:1 + 3 * d], nodal[:, 1 + 3 * d:1 + 4 * d]) if config.prescribed
-                    else (None, None))
+    m_fix, p_fix = _prescribed_sums(P, idx, mw, nodal, config)
     has = m_I > 0.0
     inv_m = jnp.where(has, 1.0 / jnp.where(has, m_I, 1.0), 0.0)[:, None]
     v_old = p_I * inv_m
@@ -674,6 +682,29 @@ def step(state: State, dt, params: Params, config: Config, source: NodalSource |
     work = jnp.sum(load * (x_p - P.x)) - params.reference_pressure * expansion
     return State(particles=particles, external_work=state.external_work + work, boundary_exchange=exchange,
                  reaction=reaction)
+
+
+def _prescribed_channels(P: Particles, mw, slots, d: int):
+    """Per velocity component, the (S, n) mass and momentum channels of the particles in ``slots`` prescribing it."""
+    mwp = [jnp.where(P.prescribed[slots, i], mw[:, slots], 0.0) for i in range(d)]
+    return mwp + [mwp[i] * P.prescribed_velocity[slots, i] for i in range(d)]
+
+
+def _prescribed_sums(P: Particles, idx, mw, nodal, config: Config):
+    """(m_fixed, p_fixed) of :func:`_constrain`, (num_nodes, dim) each, or (None, None) without prescribed
+    particles. Over the whole pool they are columns of the step's first scatter (``nodal``, after the mass,
+    momentum and force); with Config.prescribed_slots a scatter of those slots only: the other slots would add
+    zeros, the same sums at the pool's cost (a coupled run's structures are a few per cent of its pool:
+    steel-plate-blast's MPM step 1.35x faster at 0.2 ms, 36.7 against 49.6 ms)."""
+    if not config.prescribed:
+        return None, None
+    d = config.grid.dim
+    if config.prescribed_slots is None:
+        return nodal[:, 1 + 2 * d:1 + 3 * d], nodal[:, 1 + 3 * d:1 + 4 * d]
+    held = slice(*config.prescribed_slots)
+    sums = particle_to_grid(idx[:, held], _prescribed_channels(P, mw, held, d), config.grid.num_nodes,
+                            config.combined_scatter)
+    return sums[:, :d], sums[:, d:]
 
 
 def _impulse_and_work(impulse, v_old, v_new):
