@@ -695,7 +695,8 @@ def _prescribed_sums(P: Particles, idx, mw, nodal, config: Config):
     particles. Over the whole pool they are columns of the step's first scatter (``nodal``, after the mass,
     momentum and force); with Config.prescribed_slots a scatter of those slots only: the other slots would add
     zeros, the same sums at the pool's cost (a coupled run's plate can be a few per cent of its pool:
-    steel-plate-blast's MPM step at 0.2 ms 1.28x faster, 32.4 against 41.5 ms; benchmarks/constraint_sums.py)."""
+    steel-plate-blast at 0.2 ms, its MPM step 1.20-1.28x and its whole coupled step 1.15x faster;
+    benchmarks/constraint_sums.py)."""
     if not config.prescribed:
         return None, None
     d = config.grid.dim
