@@ -25,11 +25,12 @@ from blastfsi import mpm, timeloop, xla
 from blastfsi.cfdmp import coupling as cp
 from blastfsi.cfdmp.scenario import CfdmpScenario
 from blastfsi.diagnostics import blast_maps, damage
-from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE
+from blastfsi.euler.method import GEOMETRY_CODE, LIMITER_CODE, SCHEME_CODE, signal_speed
 from blastfsi.scenario import AXES, device_count
 from blastfsi.method import Coupled, Grid, Particles, register
 from blastfsi.mpm import relaxation
-from blastfsi.mpm.method import VOIGT_TO_TENSOR, placed, tracer_columns, tracer_row, tracer_summary
+from blastfsi.mpm.method import (VOIGT_TO_TENSOR, particle_signal_speed, placed, tracer_columns, tracer_row,
+                                 tracer_summary)
 from blastfsi.cfdmp import problem
 from blastfsi.euler import problem as euler_problem
 
@@ -474,12 +475,10 @@ class Cfdmp:
         step) or the active particle with the largest |u| + c, and its state."""
         g = setup.euler.grid
         prim = ek.primitives(jnp.asarray(state.U), prm.euler, cs.euler)
-        cell_speed = np.asarray(prim["sound_speed"]) + np.max(np.abs(np.asarray(prim["velocity"])), axis=0)
-        cell_speed = np.where(setup.fictitious, -np.inf, np.nan_to_num(cell_speed, nan=np.inf))
+        cell_speed = np.where(setup.fictitious, -np.inf, np.nan_to_num(signal_speed(prim), nan=np.inf))
         flat = int(np.argmax(cell_speed))
         P = state.mpm.particles
-        part_speed = np.asarray(P.wave_speed) + np.linalg.norm(np.asarray(P.v), axis=1)
-        part_speed = np.where(np.asarray(P.active), part_speed, -np.inf)
+        part_speed = particle_signal_speed(P)
         k = int(np.argmax(part_speed))
         axes = ("r", "z") if g.geometry == "axisymmetric" else AXES
         if cell_speed.reshape(-1)[flat] >= part_speed[k]:

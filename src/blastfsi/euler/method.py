@@ -180,7 +180,7 @@ class Euler:
         flat = int(kernels.first_bad_cell(U, params.kernel, cfg))
         prim = kernels.primitives(U, params.kernel, cfg)
         if flat < 0:  # a collapsed step: name the cell with the fastest signal
-            speed = np.asarray(prim["sound_speed"]) + np.max(np.abs(np.asarray(prim["velocity"])), axis=0)
+            speed = signal_speed(prim)
             flat = int(np.argmax(speed))
             what = f"fastest signal {speed.reshape(-1)[flat]:.4g} m/s"
         else:
@@ -292,3 +292,9 @@ def history(static: Static, s: State | None = None, params: Params | None = None
         row.add_block([(f"gauge{k}_velocity_{a}", "m/s") for a in AXES[:nd]],
                       lambda k=k: jnp.stack([at_gauges(prim()["velocity"][d])[k] for d in range(nd)]))
     return row
+
+
+def signal_speed(prim: dict) -> np.ndarray:
+    """Each cell's fastest signal max_d |u_d| + c (m/s) from :func:`blastfsi.euler.primitives` (the CFL step's,
+    named when a step collapses)."""
+    return np.asarray(prim["sound_speed"]) + np.max(np.abs(np.asarray(prim["velocity"])), axis=0)

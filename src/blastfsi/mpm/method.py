@@ -193,8 +193,8 @@ class MPM:
         cfg = mpm.make_config(setup.grid, setup.models)
         k = int(mpm.first_fault(jax.tree_util.tree_map(jnp.asarray, state.mpm), cfg))
         if k < 0:  # a collapsed step: name the particle with the fastest signal
-            speed = np.asarray(P.wave_speed) + np.linalg.norm(np.asarray(P.v), axis=1)
-            k = int(np.argmax(np.where(np.asarray(P.active), speed, -np.inf)))
+            speed = particle_signal_speed(P)
+            k = int(np.argmax(speed))
             what = f"fastest signal {speed[k]:.4g} m/s"
         else:
             what = (f"density {float(P.point.density[k]):.4g} kg/m^3, velocity "
@@ -371,4 +371,11 @@ def history(static: Static, s: State | None = None, params: Params | None = None
     return row
 
 
+def particle_signal_speed(P) -> np.ndarray:
+    """Each particle's signal |v| + c (m/s; -inf in the free slots), named when a step collapses."""
+    speed = np.asarray(P.wave_speed) + np.linalg.norm(np.asarray(P.v), axis=1)
+    return np.where(np.asarray(P.active), speed, -np.inf)
+
+
 METHOD = register(MPM())
+
