@@ -524,6 +524,7 @@ MEMBERS_SCRIPT = textwrap.dedent('''
 ''')
 
 
+@pytest.mark.slow  # default-suite time (32 s; the suite at 515-616 s on 2 cores), as the other split runs
 def test_sweep_members_spread_over_virtual_devices(tmp_path):
     """lagrangian1d's numerics.devices spreads the members of a sweep over the devices (each chain whole on one
     device): on 2 and 8 virtual CPU devices an 8-member plate sweep gives the one-device run's state bit for
