@@ -219,6 +219,12 @@ def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     end = example_data("cfdmp-shock-tube")["time"]["end"]
     over = {**FAST, "output.checkpoint_interval": 0.75 * end, "numerics.pool_headroom": 1.0}
     res = blastfsi.run("cfdmp-shock-tube", out=tmp_path / "a", set=over)
+    shrinks.clear()
+    monkeypatch.setattr(simulation, "next_chunk", lambda *a: 7)  # calls of 7 steps instead of about a second
+    seven = blastfsi.run("cfdmp-shock-tube", set=over)
+    assert seven.summary["pool_shrinks"] == 1 and seven.summary["steps"] == res.summary["steps"]
+    assert all(np.array_equal(a, b) for a, b in zip(jax.tree_util.tree_leaves(seven.state),
+                                                     jax.tree_util.tree_leaves(res.state)))
     checkpoint = sorted((tmp_path / "a" / "checkpoints").glob("ckpt_*.h5"))
     assert len(checkpoint) == 1
     saved, _ = results.read_checkpoint(checkpoint[0])
@@ -273,24 +279,29 @@ def test_a_pool_packed_into_fewer_slots_keeps_every_particle_and_reference(shock
 
 def test_a_mostly_empty_pool_is_packed_only_when_the_steps_left_repay_the_compilation():
     """SHRINK x the slots to two significant digits, once GROWTH x the need fits there, and only when the steps
-    left save more (POOL_SHARE of a step scaled with the slots) than a compilation costs."""
-    from blastfsi.simulation import GROWTH, POOL_SHARE, SHRINK, shrunk_capacity
+    left x the slots removed exceed PACK_SLOT_STEPS (a compilation's cost in slot-steps); the pool is looked at
+    every POOL_CHECK_WORK cell- and slot-updates, at least every POOL_CHECK_STEPS steps."""
+    from blastfsi.simulation import (GROWTH, PACK_SLOT_STEPS, POOL_CHECK_STEPS, POOL_CHECK_WORK, SHRINK,
+                                     pool_check_steps, shrunk_capacity)
 
-    assert (GROWTH, SHRINK, POOL_SHARE) == (1.25, 0.6, 0.5)
-    # steel-plate-blast at 0.15 ms: 25 264 slots, ~12 000 needed, ~45 ms a step, a 25 s compilation
-    assert shrunk_capacity(25_264, 12_000, 4000, 0.045, 25.0) == 16_000  # saves 4000 x 45 ms x 0.5 x 0.367 = 33 s
-    assert shrunk_capacity(25_264, 12_000, 3000, 0.045, 25.0) is None  # 24.8 s: not worth a compilation
-    assert shrunk_capacity(25_264, 12_900, 1e9, 1.0, 0.0) is None  # 1.25 x 12 900 > 16 000: no headroom left
-    assert shrunk_capacity(2_002, 100, 1e9, 1.0, 0.0) == 1_300 and shrunk_capacity(1_300, 100, 1e9, 1.0, 0.0) == 780
-    assert shrunk_capacity(10, 1, 1e9, 1.0, 0.0) == 6 and shrunk_capacity(6, 4, 1e9, 1.0, 0.0) is None
+    assert (GROWTH, SHRINK, PACK_SLOT_STEPS, POOL_CHECK_WORK, POOL_CHECK_STEPS) == (1.25, 0.6, 2e7, 5e6, 100)
+    # steel-plate-blast at 0.15 ms: 25 264 slots, ~12 000 needed; 9264 slots removed
+    assert shrunk_capacity(25_264, 12_000, 2200) == 16_000  # 2200 x 9264 = 2.04e7 slot-steps saved
+    assert shrunk_capacity(25_264, 12_000, 2100) is None  # 1.95e7: not worth a compilation
+    assert shrunk_capacity(25_264, 12_900, 1e9) is None  # 1.25 x 12 900 > 16 000: no headroom left
+    assert shrunk_capacity(2_002, 100, 1e9) == 1_300 and shrunk_capacity(1_300, 100, 1e9) == 780
+    assert shrunk_capacity(10, 1, 1e9) == 6 and shrunk_capacity(6, 4, 1e9) is None
+    assert pool_check_steps(50_000, 25_264) == 100 and pool_check_steps(400, 600) == 5000
 
 
 def test_a_mostly_empty_pool_shrinks_and_the_run_goes_on(shock, tmp_path, monkeypatch):  # (shock: its loop)
     """A pool of 20 x the box's gas (numerics.pool_headroom) is packed into fewer slots once the driver sees it
-    mostly empty (the compilation cost waived, once: the tube's steps are too cheap to repay it): the
-    loop is compiled again (``pool_shrinks``) and the run gives the solution of a snug pool to round-off (only
-    the order of the pool's sums changes), its mass budget closed; a restart from a checkpoint written after
-    the packing rebuilds the pool at the checkpoint's size and continues bit for bit."""
+    mostly empty (looked at every POOL_CHECK_STEPS steps and the compilation cost waived, once, mid-run: the tube's
+    pool is too small to be looked at or to repay it): the loop is compiled again (``pool_shrinks``) and the run gives the
+    solution of a snug pool to round-off (only the order of the pool's sums changes), its mass budget closed. The
+    same run in calls of other lengths (the clock sets them) packs at the same step and gives the same results to
+    the bit; a restart from a checkpoint written after the packing rebuilds the pool at the checkpoint's size and
+    continues bit for bit."""
     import shutil
 
     from blastfsi import api, method as methods, simulation
@@ -299,12 +310,13 @@ def test_a_mostly_empty_pool_shrinks_and_the_run_goes_on(shock, tmp_path, monkey
 
     shrinks = []
 
-    def worth_it_once(capacity, needed, steps_left, step_seconds, compile_seconds, real=simulation.shrunk_capacity):
-        smaller = None if shrinks else real(capacity, needed, 1e12, 1.0, 0.0)
+    def worth_it_once(capacity, needed, steps_left, real=simulation.shrunk_capacity):
+        smaller = None if shrinks or steps_left > 250 else real(capacity, needed, 1e12)  # (mid-run, in motion)
         shrinks.extend([smaller] if smaller else [])
         return smaller
 
     monkeypatch.setattr(simulation, "shrunk_capacity", worth_it_once)
+    monkeypatch.setattr(simulation, "POOL_CHECK_WORK", 0.0)
     end = example_data("cfdmp-shock-tube")["time"]["end"]
     over = {**FAST, "numerics.pool_headroom": 20.0, "output.checkpoint_interval": 0.75 * end}
     res = blastfsi.run("cfdmp-shock-tube", out=tmp_path / "a", set=over)
@@ -317,6 +329,12 @@ def test_a_mostly_empty_pool_shrinks_and_the_run_goes_on(shock, tmp_path, monkey
     f, g = res.fields(), snug.fields()
     for name in ("density", "pressure", "velocity"):
         assert np.max(np.abs(f[name] - g[name])) <= 1e-9 * np.max(np.abs(g[name]))
+    shrinks.clear()
+    monkeypatch.setattr(simulation, "next_chunk", lambda *a: 7)  # calls of 7 steps instead of about a second
+    seven = blastfsi.run("cfdmp-shock-tube", set=over)
+    assert seven.summary["pool_shrinks"] == 1 and seven.summary["steps"] == res.summary["steps"]
+    assert all(np.array_equal(a, b) for a, b in zip(jax.tree_util.tree_leaves(seven.state),
+                                                     jax.tree_util.tree_leaves(res.state)))
     checkpoint = sorted((tmp_path / "a" / "checkpoints").glob("ckpt_*.h5"))
     assert len(checkpoint) == 1
     saved, _ = results.read_checkpoint(checkpoint[0])

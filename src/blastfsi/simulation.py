@@ -193,12 +193,13 @@ FIRST_CHUNK = 10  # steps of the first call of the compiled time loop; the next 
 CHUNK_SECONDS = 1.0  # wall-clock seconds of a call: the progress and Ctrl-C act between calls
 
 
-def next_chunk(steps: int, seconds: float, cap: int) -> int:
+def next_chunk(steps: int, seconds: float, cap: int, planned: int = 0) -> int:
     """Steps of the next call of the time loop, after one of ``steps`` steps took ``seconds``: as many as
-    take CHUNK_SECONDS at that rate, at most 4 x ``steps`` (the first calls are short) and ``cap``."""
+    take CHUNK_SECONDS at that rate, at most 4 x the steps that call was ``planned`` to take (the first calls are
+    short; a call cut short by an output time or a look at the pool does not shrink the next) and ``cap``."""
     steps = max(steps, 1)
     aim = steps * CHUNK_SECONDS / seconds if seconds > 0.0 else 4.0 * steps
-    return int(max(1, min(aim, 4 * steps, cap)))
+    return int(max(1, min(aim, 4 * max(steps, planned), cap)))
 
 
 GROWTH = 1.25  # a full particle pool grows to GROWTH x (the particles it needed), in whole thousands: a growth
@@ -209,11 +210,13 @@ SHRINK = 0.6  # a mostly empty pool is packed into SHRINK x its slots (two signi
 #               run to run, which the persistent compilation cache then holds) once GROWTH x its need fits there: a
 #               pool that emptied (the gas that the blast pushed into an MPM box flowing out again) stops
 #               costing its empty slots; packing changes only the order of the pool's sums (round-off)
-POOL_SHARE = 0.5  # share of a coupled step's time assumed to scale with the pool's slots, for the decision to
-#                   shrink (measured: 0.79 in steel-plate-blast at 0.15 ms, 41.8 ms a step with 25 264 slots,
-#                   27.1 ms with 14 000)
-LEAST_COMPILE = 2.0  # s, the least a compilation of the time loop is taken to cost in that decision (a load from
-#                      the persistent compilation cache: 1.9 s for he-slab-2d), also when this process reused it
+PACK_SLOT_STEPS = 2.0e7  # slot-steps (steps left x slots removed) a packing must save to be made: what compiling the
+#                          time loop again costs, counted in the pool's slot-steps (steel-plate-blast on the 2-core CPU:
+#                          1.3e-6 s a slot-step, from 41.8 ms a step with 25 264 slots and 27.1 ms with 14 000 in one
+#                          state, against a 25-40 s compilation). A count, not a clock: identical runs pack at the
+#                          same step, so that they give identical results (docs/theory/cfdmp.md)
+POOL_CHECK_WORK = 5.0e6  # cell- and slot-updates between two looks at a resizable pool (at least POOL_CHECK_STEPS
+POOL_CHECK_STEPS = 100  # steps): the calls of the time loop end at multiples of that many steps, where it is looked at
 
 
 def _pool_size(method: methods.Method, state) -> int:
@@ -237,23 +240,26 @@ def _resized(method: methods.Method, setups: list, state, capacity: int | None =
     return [r[0] for r in resized], _stack([r[1]._replace(fault=np.zeros_like(r[1].fault)) for r in resized], "state")
 
 
-def shrunk_capacity(capacity: int, needed: int, steps_left: float, step_seconds: float,
-                    compile_seconds: float) -> int | None:
+def shrunk_capacity(capacity: int, needed: int, steps_left: float) -> int | None:
     """The smaller pool a mostly empty one of ``capacity`` slots is packed into, or None to keep it: SHRINK x
     ``capacity`` rounded up to two significant digits (the same sizes from run to run), when ``needed`` slots
-    with GROWTH's headroom fit there (the pool then has the room a growth would give it) and the time the
-    ``steps_left`` save, POOL_SHARE of ``step_seconds`` scaled with the slots, exceeds a compilation's
-    ``compile_seconds``."""
+    with GROWTH's headroom fit there (the pool then has the room a growth would give it) and the ``steps_left``
+    save more than PACK_SLOT_STEPS slot-steps (a compilation's cost)."""
     digits = 10 ** max(len(str(int(SHRINK * capacity))) - 2, 0)
     smaller = int(np.ceil(SHRINK * capacity / digits)) * digits
     if smaller >= capacity or GROWTH * needed > smaller:
         return None
-    saved = steps_left * step_seconds * POOL_SHARE * (1.0 - smaller / capacity)
-    return smaller if saved > compile_seconds else None
+    return smaller if steps_left * (capacity - smaller) > PACK_SLOT_STEPS else None
 
 
-def _sparse_pool(method: methods.Method, setups: list, state, t_end: float, step_seconds: float,
-                 compile_seconds: float) -> int | None:
+def pool_check_steps(cells: int, capacity: int) -> int:
+    """Steps between two looks at a resizable pool of ``capacity`` slots beside ``cells`` cells: about
+    POOL_CHECK_WORK cell- and slot-updates, at least POOL_CHECK_STEPS (a look costs a transfer of the pool's
+    flags to the host). It depends on the sizes only, so the looks fall on the same steps in every run."""
+    return max(POOL_CHECK_STEPS, int(np.ceil(POOL_CHECK_WORK / max(cells + capacity, 1))))
+
+
+def _sparse_pool(method: methods.Method, setups: list, state, t_end: float) -> int | None:
     """:func:`shrunk_capacity` of the batch's pool (the largest need of its members; the steps left at the
     last step's length), or None; only for a pool the method may resize."""
     if not isinstance(method, methods.GrowingPool):
@@ -265,7 +271,7 @@ def _sparse_pool(method: methods.Method, setups: list, state, t_end: float, step
     needed = max(method.pool_needed(m, setup) for m, setup in zip(_members(state), setups))
     dt = float(np.min(np.asarray(state.dt_prev)))
     steps_left = (t_end - float(np.min(np.asarray(state.t)))) / dt if dt > 0.0 else 0.0
-    return shrunk_capacity(capacity, needed, steps_left, step_seconds, compile_seconds)
+    return shrunk_capacity(capacity, needed, steps_left)
 
 
 def fit_pool(method: methods.Method, setups: list, saved: dict, fresh):
@@ -384,7 +390,8 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
         bar.start(sc.time.end, t_start, int(np.max(np.asarray(state.step))))
         chunk = min(FIRST_CHUNK, chunk_steps)  # steps of the next call of the time loop (next_chunk)
         started, resize_compile, resizes = wallclock.perf_counter(), 0.0, {"pool_growths": 0, "pool_shrinks": 0}
-        compile_cost, step_seconds, fixed_pool = max(compile_time, LEAST_COMPILE), 0.0, False
+        every = (pool_check_steps(setups[0].cells, _pool_size(method, state))  # (None: no pool to look at, or
+                 if isinstance(method, methods.GrowingPool) else None)          # one the scenario fixed, found below)
         spent = {"loop": 0.0, "output": 0.0}  # the compiled time loop's calls; snapshots, checkpoints, history, summary
 
         def timed(part, fn, *args):
@@ -394,13 +401,12 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
             return value
 
         def advanced(state, t_stop):  # the time loop's call of at most `chunk` steps, waited for; sizes the next
-            nonlocal chunk, step_seconds
+            nonlocal chunk
             before, t0 = int(np.max(np.asarray(state.step))), wallclock.perf_counter()
-            steps = max(1, min(chunk, sc.time.max_steps - before))
+            steps = max(1, min(chunk, sc.time.max_steps - before, every - before % every if every else chunk))
             state = jax.block_until_ready(advance(state, params, t_stop, steps, *scalars[1:]))
             taken, seconds = int(np.max(np.asarray(state.step))) - before, wallclock.perf_counter() - t0
-            chunk = next_chunk(taken, seconds, chunk_steps)
-            step_seconds = seconds / taken if taken else step_seconds
+            chunk = next_chunk(taken, seconds, chunk_steps, chunk)
             return state
 
         def summary(host, status: str) -> list[dict]:  # of each member (host: the batched state on the host)
@@ -423,11 +429,12 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
                     state = timed("loop", advanced, state, t_stop)
                     fault = np.asarray(state.fault)
                     full = np.any(fault == FAULT_POOL_FULL)
-                    healthy = not fixed_pool and np.all(fault == FAULT_NONE)
-                    smaller = _sparse_pool(method, setups, state, stops[-1], step_seconds,
-                                           compile_cost) if healthy else None
+                    look = (every is not None and int(np.max(np.asarray(state.step))) % every == 0
+                            and np.all(fault == FAULT_NONE))  # (on the same steps in every run: see advanced)
+                    smaller = _sparse_pool(method, setups, state, stops[-1]) if look else None
                     resized = _resized(method, setups, state, smaller) if full or smaller else None
-                    fixed_pool = fixed_pool or (smaller is not None and resized is None)  # (numerics.capacity)
+                    if smaller is not None and resized is None:  # (numerics.capacity)
+                        every = None
                     if resized is not None:  # the resized pool and its compiled loop (its compilation counts as such)
                         setups, state = resized
                         now = report.quantity(float(np.min(np.asarray(state.t))), 's')
@@ -438,6 +445,7 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
                         compile_time += more
                         resize_compile += more
                         resizes["pool_growths" if full else "pool_shrinks"] += 1
+                        every = pool_check_steps(setups[0].cells, _pool_size(method, state))
                         continue
                     stop = _stop_reason(state, method, setups, sc)
                     if stop is not None:  # (the history up to it is kept, as are the snapshots and checkpoints)
