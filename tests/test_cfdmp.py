@@ -219,12 +219,6 @@ def test_restart_from_a_grown_pool_is_bit_for_bit(tmp_path):
     end = example_data("cfdmp-shock-tube")["time"]["end"]
     over = {**FAST, "output.checkpoint_interval": 0.75 * end, "numerics.pool_headroom": 1.0}
     res = blastfsi.run("cfdmp-shock-tube", out=tmp_path / "a", set=over)
-    shrinks.clear()
-    monkeypatch.setattr(simulation, "next_chunk", lambda *a: 7)  # calls of 7 steps instead of about a second
-    seven = blastfsi.run("cfdmp-shock-tube", set=over)
-    assert seven.summary["pool_shrinks"] == 1 and seven.summary["steps"] == res.summary["steps"]
-    assert all(np.array_equal(a, b) for a, b in zip(jax.tree_util.tree_leaves(seven.state),
-                                                     jax.tree_util.tree_leaves(res.state)))
     checkpoint = sorted((tmp_path / "a" / "checkpoints").glob("ckpt_*.h5"))
     assert len(checkpoint) == 1
     saved, _ = results.read_checkpoint(checkpoint[0])
