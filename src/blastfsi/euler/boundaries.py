@@ -2,7 +2,10 @@
 
 Kinds (config): outflow = zero-gradient copy of the edge cell; wall, symmetry
 plane and the axis r = 0 = mirror image with the normal vector component
-negated; periodic = the cells of the opposite end.
+negated; periodic = the cells of the opposite end. A kind + SPLIT marks the x edge of one device's slab of a
+grid split along x, inside ``shard_map`` over the mesh axis SPLIT_AXIS: its ghost cells are the neighbouring
+slab's edge cells (one collective permute per side), and those of the kind itself on the slabs at the domain's
+ends (:func:`_from_neighbour`).
 
 Blast faces (a charge outside the grid, :class:`blastfsi.euler.config.BlastTable`):
 the scheme sees an outflow face, and the layer of cells along it is set after
@@ -16,7 +19,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from blastfsi.euler.config import OUTFLOW, PERIODIC, BlastTable, Layout
+from blastfsi.euler.config import OUTFLOW, PERIODIC, SPLIT, BlastTable, Layout
+from blastfsi.xla import SPLIT_AXIS
 
 
 def _slice(x, axis, start, stop):
@@ -25,7 +29,23 @@ def _slice(x, axis, start, stop):
     return x[tuple(idx)]
 
 
+def _from_neighbour(x, axis, ng, upper, own, kind):
+    """The ``ng`` ghost planes of a slab's edge (upper or lower) along a split ``axis``: the neighbouring slab's
+    edge planes, sent by every device to the one below (upper ghosts) or above (lower ghosts), and ``own`` (the
+    ghosts of the boundary ``kind``) on the slab at the domain's end; periodic: the slab at the other end's."""
+    devices, k, n = jax.lax.axis_size(SPLIT_AXIS), jax.lax.axis_index(SPLIT_AXIS), x.shape[axis]
+    to = -1 if upper else 1  # (a device's upper ghosts are the first planes of the one above it)
+    pairs = [(j, (j + to) % devices) for j in range(devices) if kind == PERIODIC or 0 <= j + to < devices]
+    got = jax.lax.ppermute(_slice(x, axis, 0, ng) if upper else _slice(x, axis, n - ng, n), SPLIT_AXIS, pairs)
+    if kind == PERIODIC:
+        return got
+    return jnp.where(k == (devices - 1 if upper else 0), own, got)
+
+
 def _ghosts(x, axis, kind, ng, sign, upper):
+    if kind >= SPLIT:
+        own = None if kind == SPLIT + PERIODIC else _ghosts(x, axis, kind - SPLIT, ng, sign, upper)
+        return _from_neighbour(x, axis, ng, upper, own, kind - SPLIT)
     n = x.shape[axis]
     if kind == OUTFLOW:
         edge = _slice(x, axis, n - 1, n) if upper else _slice(x, axis, 0, 1)
@@ -60,6 +80,16 @@ def extend(x, axis, kinds, lo, hi, sign=None):
     return parts[0] if len(parts) == 1 else jnp.concatenate(parts, axis=axis)
 
 
+def extend_rows(rows, axis, kinds, lo, hi, flip=None):
+    """:func:`extend` of each of ``rows`` (a tuple of arrays), the row numbered ``flip`` changing sign in a mirror;
+    on the split axis of a slab (kinds + SPLIT) all rows are extended as one stacked array, so that their ghost
+    cells cross to the neighbouring slabs in one exchange per side."""
+    if max(kinds) < SPLIT:
+        return tuple(extend(x, axis, kinds, lo, hi, -1.0 if r == flip else None) for r, x in enumerate(rows))
+    sign = jnp.asarray([-1.0 if r == flip else 1.0 for r in range(len(rows))], rows[0].dtype)
+    return tuple(extend(jnp.stack(rows), axis + 1, kinds, lo, hi, sign.reshape((-1,) + (1,) * rows[0].ndim)))
+
+
 def extend_coefficient(k, axis, kinds):
     """One ghost cell each side of the viscosity coefficient k_i = eta_i |theta_i| of lax_wendroff.py.
 
@@ -69,6 +99,12 @@ def extend_coefficient(k, axis, kinds):
     """
     lo_kind, hi_kind = kinds
     n = k.shape[axis]
+    if max(kinds) >= SPLIT:  # a split axis: the neighbouring slab's edge cell, the kind's ghost at the domain's end
+        own = extend_coefficient(k, axis, (lo_kind % SPLIT, hi_kind % SPLIT))
+        lo, hi = _slice(own, axis, 0, 1), _slice(own, axis, n + 1, n + 2)
+        lo = _from_neighbour(k, axis, 1, False, lo, lo_kind - SPLIT) if lo_kind >= SPLIT else lo
+        hi = _from_neighbour(k, axis, 1, True, hi, hi_kind - SPLIT) if hi_kind >= SPLIT else hi
+        return jnp.concatenate([lo, k, hi], axis=axis)
 
     def ghost(kind, upper):  # (an outflow face's: the edge cell, zeroed below)
         if kind == PERIODIC:

@@ -19,6 +19,9 @@ import jax
 
 CARTESIAN, CYLINDRICAL, SPHERICAL = 0, 1, 2
 OUTFLOW, WALL, AXIS, PERIODIC = 0, 1, 2, 3
+SPLIT = 8  # added to an x boundary kind inside one device's slab of a grid split along x (blastfsi.euler.step: the
+#            explicit halo exchange): the slab's edge takes its ghost cells from the neighbouring slab, and those
+#            of its own kind at the domain's end (boundaries.py)
 LAX_WENDROFF, HLLC_MUSCL, HLLC_HANCOCK = 0, 1, 2
 VAN_LEER, MINMOD, MC = 0, 1, 2  # slope limiters of the HLLC schemes (hllc.limited_slope)
 

@@ -10,13 +10,29 @@ them). A radial flux divergence is written
 
 and the pressure force on the radial momentum p_i (A_{i+1/2} - A_{i-1/2}) / V_i,
 which balances the pressure flux exactly in a uniform state at rest. All
-factors are host-side NumPy constants of the static configuration.
+factors are host-side NumPy constants of the static configuration; on one device's slab of a grid split along
+the radius (x kinds + SPLIT, inside ``shard_map``) they are the whole grid's, cut at the slab's place.
 """
 from __future__ import annotations
 
+import jax
 import numpy as np
 
-from blastfsi.euler.config import AXIS, CARTESIAN, WALL, Config
+from blastfsi.euler.config import AXIS, CARTESIAN, SPLIT, WALL, Config
+from blastfsi.xla import SPLIT_AXIS
+
+
+def _on_slab(factor, cfg: Config, first: int, count: int, dtype):
+    """``factor(cfg, first, count, dtype)`` on a slab (cfg.bc[0] kinds + SPLIT): the whole grid's values at the
+    slab's cells first .. first+count-1, the slab being the axis_index-th of axis_size equal ones."""
+    devices = jax.lax.axis_size(SPLIT_AXIS)
+    (lo, hi), n = cfg.bc[0], cfg.shape[0]
+    whole = cfg._replace(shape=(n * devices, *cfg.shape[1:]), bc=((lo - SPLIT, hi - SPLIT), *cfg.bc[1:]))
+    start = jax.lax.axis_index(SPLIT_AXIS) * n + first
+    values = factor(whole, 0, whole.shape[0] + count - n, dtype)  # (faces: count = n + 1)
+    cut = [jax.lax.dynamic_slice_in_dim(np.asarray(v), start, count, axis=0) for v in
+           (values if isinstance(values, tuple) else (values,))]
+    return tuple(cut) if isinstance(values, tuple) else cut[0]
 
 
 def _along_axis0(v, ndim, dtype):
@@ -30,12 +46,22 @@ def _faces(cfg: Config, first: int, count: int):
 
 def flux_factors(cfg: Config, first: int, count: int, dtype):
     """(g+, g-) of cells first .. first+count-1."""
+    if cfg.bc[0][0] >= SPLIT:
+        return _on_slab(flux_factors, cfg, first, count, dtype)
     j = cfg.geometry
     r = _faces(cfg, first, count)
     area = r ** j
     vol = np.diff(r ** (j + 1)) / (j + 1)
     nd = len(cfg.shape)
     return _along_axis0(area[1:] * cfg.dx / vol, nd, dtype), _along_axis0(area[:-1] * cfg.dx / vol, nd, dtype)
+
+
+def cell_source_factor(cfg: Config, first: int, count: int, dtype):
+    """j dx / r at the centres of cells first .. first+count-1 (MUSCL-Hancock's geometric source)."""
+    if cfg.bc[0][0] >= SPLIT:
+        return _on_slab(cell_source_factor, cfg, first, count, dtype)
+    r = cfg.origin[0] + cfg.dx * (np.arange(first, first + count) + 0.5)
+    return _along_axis0(cfg.geometry * cfg.dx / r, len(cfg.shape), dtype)
 
 
 def face_source_factor(cfg: Config, first: int, count: int, dtype):
@@ -47,6 +73,8 @@ def face_source_factor(cfg: Config, first: int, count: int, dtype):
     predicted normal momentum there (the mirror average gives exactly 0 without
     the source), so that no mass or energy crosses the wall.
     """
+    if cfg.bc[0][0] >= SPLIT:
+        return _on_slab(face_source_factor, cfg, first, count, dtype)
     f = np.arange(first, first + count)
     r = cfg.origin[0] + cfg.dx * f.astype(np.float64)
     mirror = ((f == 0) & (cfg.bc[0][0] in (WALL, AXIS))) | ((f == cfg.shape[0]) & (cfg.bc[0][1] in (WALL, AXIS)))

@@ -43,9 +43,8 @@ alpha).
 from __future__ import annotations
 
 import jax.numpy as jnp
-import numpy as np
 
-from blastfsi.euler import hllc
+from blastfsi.euler import geometry, hllc
 from blastfsi.euler.boundaries import pad, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.hllc import NG
@@ -57,9 +56,7 @@ from blastfsi.xla import materialise
 def radial_source_factor(cfg: Config, dtype):
     """j dx / r at the centres of the cells -1..n of the radial axis (a mirror ghost cell: the negated
     factor of its image, an outflow one: its edge cell's), shaped to broadcast along axis 0."""
-    r = cfg.origin[0] + cfg.dx * (np.arange(cfg.shape[0]) + 0.5)
-    factor = np.asarray(cfg.geometry * cfg.dx / r, dtype).reshape((-1,) + (1,) * (len(cfg.shape) - 1))
-    return pad(jnp.asarray(factor), 0, cfg.bc[0], 1, -1.0)
+    return pad(jnp.asarray(geometry.cell_source_factor(cfg, 0, cfg.shape[0], dtype)), 0, cfg.bc[0], 1, -1.0)
 
 
 def predictor(w, slope, c2, lam, geo, lay, axis):

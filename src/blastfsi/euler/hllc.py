@@ -38,7 +38,7 @@ import jax.numpy as jnp
 
 from blastfsi.euler import geometry
 from blastfsi.euler.blocking import blocked
-from blastfsi.euler.boundaries import pad, shift
+from blastfsi.euler.boundaries import extend_rows, shift
 from blastfsi.euler.config import CARTESIAN, MINMOD, VAN_LEER, Config
 from blastfsi.euler.mixture import assemble_rows, cell_state, closure_from_pressure, volume_fractions
 from blastfsi.xla import fori, materialise
@@ -214,8 +214,9 @@ def axis_flux(z, nw, eos_r, cfg: Config, lay, axis):
 
 
 def padded(cells, cfg: Config, lay, axis):
-    """Cell rows with NG ghost cells on ``axis`` (boundaries.pad; the normal velocity changes sign in a mirror)."""
-    return tuple(pad(x, axis, cfg.bc[axis], NG, -1.0 if r == lay.n + axis else None) for r, x in enumerate(cells))
+    """Cell rows with NG ghost cells on ``axis`` (boundaries.extend_rows; the normal velocity changes sign in a
+    mirror)."""
+    return extend_rows(cells, axis, cfg.bc[axis], NG, NG, lay.n + axis)
 
 
 def flux_divergence(flux, u_face, p, alpha, cfg: Config, lay, axis):

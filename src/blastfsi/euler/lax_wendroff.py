@@ -54,7 +54,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from blastfsi.euler import geometry
-from blastfsi.euler.boundaries import extend, extend_coefficient, shift
+from blastfsi.euler.boundaries import extend_coefficient, extend_rows, shift
 from blastfsi.euler.config import CARTESIAN, Config
 from blastfsi.euler.mixture import cell_state, pressure_velocity
 from blastfsi.euler.splitting import split_step
@@ -81,12 +81,13 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False)
     dtype = rows[0].dtype
     radial = axis == 0 and cfg.geometry != CARTESIAN
 
-    def ext(x, r, lo=1, hi=1):  # row r with ghost cells (the normal momentum changes sign in a mirror)
-        return extend(x, axis, kinds, lo, hi, -1.0 if r == nrm else None)
+    def ext(rows):  # the rows with a ghost cell each side (the normal momentum changes sign in a mirror)
+        return extend_rows(rows, axis, kinds, 1, 1, nrm)
 
     # 000 Eqs. (3)-(5): adaptive viscosity; cells 0..n-1, faces 0..n (face f between cells f-1 and f).
+    rows_ext = ext(rows)
     rho = rows[0] if lay.n == 1 else rows[0] + rows[1]
-    jump = jnp.abs(jnp.diff(ext(rho, 0), axis=axis))  # faces 0..n
+    jump = jnp.abs(jnp.diff(rows_ext[0] if lay.n == 1 else rows_ext[0] + rows_ext[1], axis=axis))  # faces 0..n
     d_lo, d_hi = shift(jump, axis, 0, n), shift(jump, axis, 1, n)
     theta = jnp.abs(d_hi - d_lo) / jnp.maximum(d_hi + d_lo, jnp.finfo(dtype).tiny)
     nu = (jnp.abs(rows[nrm] / rho) + c) * lam
@@ -95,13 +96,13 @@ def sweep(rows, c, dt, eos_r, cfg: Config, lay, axis: int, record: bool = False)
     if radial:
         gp, gm = geometry.flux_factors(cfg, 0, n, dtype)
     ubar, visc = [], []
-    for r, x in enumerate(rows):
-        d = k_face * jnp.diff(ext(x, r), axis=axis)
+    for x, x_ext in zip(rows, rows_ext):
+        d = k_face * jnp.diff(x_ext, axis=axis)
         visc.append(d)
         d_hi, d_lo = shift(d, axis, 1, n), shift(d, axis, 0, n)
         ubar.append(x + (gp * d_hi - gm * d_lo if radial else d_hi - d_lo))
     # the operator acts on U_bar with its own boundary values (one ghost cell each side: cells -1..n)
-    ubar = tuple(ext(x, r) for r, x in enumerate(ubar))
+    ubar = ext(tuple(ubar))
 
     # Richtmyer predictor at faces -1/2 .. n-1/2.
     p, un = pressure_velocity(ubar, eos_r, lay, axis)
