@@ -627,8 +627,9 @@ def test_outflow_mirror_is_one_way():
     setup = cfdmp.build(sc)
     cs, prm = cfdmp.static(setup, sc).coupling, cfdmp.params(setup, jnp.float64)
     st = cfdmp.initial_state(setup, sc, 2, jnp.float64)
-    ms, _ = cp.activate(st.U, st.mpm, cp.flat_primitives(st.U, prm.euler.eos, cs.euler), prm.euler.eos, prm.mpm,
-                        cs, prm.layout)
+    # (the coupling's functions compiled, as in a run: op by op they took twice the test's time)
+    ms, _ = jax.jit(cp.activate, static_argnums=5)(st.U, st.mpm, cp.flat_primitives(st.U, prm.euler.eos, cs.euler),
+                                                   prm.euler.eos, prm.mpm, cs, prm.layout)
     area = np.asarray(prm.layout.outflow_area)
     face = area[:, 0] != 0.0  # the upper x face (the box's only face on a flow-out boundary)
     assert face.sum() == cs.mpm.grid.nodes[1] and np.all(area[face, 0] < 0.0)
@@ -638,7 +639,7 @@ def test_outflow_mirror_is_one_way():
     def mirror(mach):
         P = ms.particles
         P = P._replace(v=P.v.at[:, 0].set(jnp.where(P.active, mach * c, 0.0)))
-        src = cp.outflow_ghost(P, prm.layout, cs, 0.0)
+        src = jax.jit(cp.outflow_ghost, static_argnums=2)(P, prm.layout, cs, 0.0)
         return np.asarray(src.mass)[face], np.asarray(src.force)[face, 0]
 
     m_out, f_out = mirror(0.5)
@@ -773,7 +774,8 @@ def test_gas_stalled_at_a_coupled_face_joins_the_inflow_particle():
     setup = method.build(scs[0])
     static, params = method.static(setup, scs[0]), method.params(setup, jnp.float64)
     cs, lay = static.coupling, params.layout
-    s = _activate(method.initial_state(setup, scs[0], 3, jnp.float64), params, cs)
+    # (the coupling's functions compiled, as in a run: op by op they took four times the test's time)
+    s = jax.jit(_activate, static_argnums=2)(method.initial_state(setup, scs[0], 3, jnp.float64), params, cs)
     P = s.mpm.particles
     h, lo = cs.mpm.grid.cell_size, float(lay.box_lower[0])
     gas = np.where(np.asarray(P.active))[0]
@@ -789,7 +791,7 @@ def test_gas_stalled_at_a_coupled_face_joins_the_inflow_particle():
     assert cs.faces[0][1] == 0 and upper == 1
     buffer = s.reservoirs.buffer.at[0, 0].set(inflow)
     res = s.reservoirs._replace(buffer=buffer)
-    ms, res, budget = cp.remove_leaving(s.mpm._replace(particles=P), res, s.budget, cs, lay)
+    ms, res, budget = jax.jit(cp.remove_leaving, static_argnums=3)(s.mpm._replace(particles=P), res, s.budget, cs, lay)
     active = np.asarray(ms.particles.active)
     assert not active[stalled] and active[inflow] and active[clear] and active[unfed]
     m_stalled = float(P.mass[stalled])
@@ -797,7 +799,7 @@ def test_gas_stalled_at_a_coupled_face_joins_the_inflow_particle():
     assert float(res.momentum[0, 0, 0]) == pytest.approx(-30.0 * m_stalled, rel=1e-14)
     assert float(jnp.sum(res.mass)) == pytest.approx(m_stalled, rel=1e-14)
     prim = cp.flat_primitives(s.U, params.euler.eos, cs.euler)
-    fed, res, _ = cp.feed(ms, res, budget, prim, params.euler.eos, params.mpm, cs, lay)
+    fed, res, _ = jax.jit(cp.feed, static_argnums=6)(ms, res, budget, prim, params.euler.eos, params.mpm, cs, lay)
     Q = fed.particles
     m_in = float(P.mass[inflow]) + m_stalled
     assert float(Q.mass[inflow]) == pytest.approx(m_in, rel=1e-14) and float(res.mass[0, 0]) == 0.0
