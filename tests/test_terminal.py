@@ -93,6 +93,7 @@ def test_time_loop_calls_aim_at_a_second():
     assert simulation.next_chunk(4000, 2.0, 20_000) == 2000  # 2 s for 4000 steps: 2000 in a second
     assert simulation.next_chunk(20_000, 0.1, 20_000) == 20_000  # the cap
     assert simulation.next_chunk(5, 100.0, 20_000) == 1  # a step longer than a second: one per call
+    assert simulation.next_chunk(3, 1e-4, 20_000, 100) == 400  # a call planned for 100, cut to 3 (an output time)
 
 
 # ------------------------------------------------------------------------------------ the command line
