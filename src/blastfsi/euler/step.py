@@ -144,7 +144,7 @@ def _slab_by_slab(scheme, parity, U, dt, eos_r, cfg: Config, lay, moved=None):
     neighbouring slabs (boundaries.py: one collective permute per side and exchange point, all rows at once)
     and those of the boundary at the domain's ends; a radial metric is the whole grid's, cut at the slab's
     place (geometry.py). The compiler's own partitioning of the whole grid's step exchanged each row and
-    stencil shift on its own (46 permutes a step of sedov-2d with HLLC-MUSCL, against 4) and was 1.6-4.3x
+    stencil shift on its own (46 permutes in sedov-2d's compiled HLLC-MUSCL step, against 2) and was 1.6-4.3x
     slower on 2-8 virtual CPU devices (benchmarks/halo_exchange.py). The step with face transfers (``moved``:
     the coupled solver's, whose grid is not split) keeps the compiler's partitioning, as do slabs thinner than
     the ghost depth MIN_CELLS."""
