@@ -63,7 +63,8 @@ def main(argv=None) -> None:
         for t_stop in np.linspace(begin, sc.time.end, 25)[1:]:
             while float(state.t[0]) < t_stop:
                 state = advance(state, params, t_stop, *scalars[1:])
-            dt_e, dt_gas, dt_solid, rho, speed = (float(x) for x in limits(jax.tree_util.tree_map(lambda a: a[0], state)))
+            member = jax.tree_util.tree_map(lambda a: a[0], state)
+            dt_e, dt_gas, dt_solid, rho, speed = (float(x) for x in limits(member))
             t, step = float(state.t[0]), int(state.step[0])
             rows.append({"t": t, "steps": step - last_step, "mean_dt": (t - last_t) / max(step - last_step, 1),
                          "dt_euler": dt_e, "dt_gas": dt_gas, "dt_solid": dt_solid,
@@ -71,7 +72,8 @@ def main(argv=None) -> None:
             print(json.dumps(rows[-1]), flush=True)
             last_t, last_step = t, step
     solid_need = sum((r["t"] - t0) / r["dt_solid"] for r, t0 in zip(rows, [begin] + [r["t"] for r in rows[:-1]]))
-    record = {"machine": described(), "date_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M"),
+    now = datetime.datetime.now(datetime.timezone.utc)
+    record = {"machine": described(), "date_utc": now.strftime("%Y-%m-%d %H:%M"),
               "command": "python benchmarks/step_limiters.py " + " ".join(sys.argv[1:]),
               "loop_seconds": round(time.perf_counter() - started, 1), "steps": last_step,
               "steel_alone_would_need": round(solid_need), "ratio": round(last_step / solid_need, 3), "rows": rows}

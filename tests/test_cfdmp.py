@@ -290,9 +290,9 @@ def test_a_mostly_empty_pool_is_packed_only_when_the_steps_left_repay_the_compil
 
 def test_a_mostly_empty_pool_shrinks_and_the_run_goes_on(shock, tmp_path, monkeypatch):  # (shock: its loop)
     """A pool of 20 x the box's gas (numerics.pool_headroom) is packed into fewer slots once the driver sees it
-    mostly empty (looked at every POOL_CHECK_STEPS steps and the compilation cost waived, once, mid-run: the tube's
-    pool is too small to be looked at or to repay it): the loop is compiled again (``pool_shrinks``) and the run gives the
-    solution of a snug pool to round-off (only the order of the pool's sums changes), its mass budget closed. The
+    mostly empty (looked at every POOL_CHECK_STEPS steps and the compilation cost waived, once, mid-run: the
+    tube's pool is too small to be looked at or to repay it): the loop is compiled again (``pool_shrinks``) and
+    the run gives the solution of a snug pool to round-off (only the order of the pool's sums changes), its mass budget closed. The
     same run in calls of other lengths (the clock sets them) packs at the same step and gives the same results to
     the bit; a restart from a checkpoint written after the packing rebuilds the pool at the checkpoint's size and
     continues bit for bit."""

@@ -125,17 +125,21 @@ def first_bad_cell(U, params: Params, cfg: Config):
     return jnp.where(jnp.any(flat), jnp.argmax(flat), -1)
 
 
-def _kernel(cfg: Config, parity):
-    """The scheme's step (U, dt, eos_r, cfg, lay, moved); HLLC-Hancock's alternates its sweeps by ``parity``.
-    A grid split over devices steps slab by slab (:func:`_slab_by_slab`)."""
+def _scheme(cfg: Config):
+    """The scheme's step (U, dt, eos_r, cfg, lay, moved=None, parity=0); only HLLC-Hancock reads ``parity``
+    (it alternates its sweeps)."""
     if cfg.scheme == HLLC_HANCOCK:
-        scheme = hancock.step
-    else:
-        plain = {LAX_WENDROFF: lax_wendroff.step, HLLC_MUSCL: hllc.step}[cfg.scheme]
-        scheme = lambda U, dt, eos_r, cfg, lay, moved=None, parity=0: plain(U, dt, eos_r, cfg, lay, moved)  # noqa: E731
+        return hancock.step
+    plain = {LAX_WENDROFF: lax_wendroff.step, HLLC_MUSCL: hllc.step}[cfg.scheme]
+    return lambda U, dt, eos_r, cfg, lay, moved=None, parity=0: plain(U, dt, eos_r, cfg, lay, moved)
+
+
+def _kernel(cfg: Config, parity):
+    """The scheme's step (U, dt, eos_r, cfg, lay, moved) at ``parity``; a grid split over devices steps slab by
+    slab (:func:`_slab_by_slab`)."""
     if cfg.devices > 1 and cfg.shape[0] // cfg.devices >= MIN_CELLS:
-        return functools.partial(_slab_by_slab, scheme, parity)
-    return lambda U, dt, eos_r, cfg, lay, moved=None: scheme(U, dt, eos_r, cfg, lay, moved, parity=parity)
+        return functools.partial(_slab_by_slab, _scheme(cfg), parity)
+    return functools.partial(_scheme(cfg), parity=parity)
 
 
 def _slab_by_slab(scheme, parity, U, dt, eos_r, cfg: Config, lay, moved=None):

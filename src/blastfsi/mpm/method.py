@@ -378,4 +378,3 @@ def particle_signal_speed(P) -> np.ndarray:
 
 
 METHOD = register(MPM())
-
