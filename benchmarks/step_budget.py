@@ -10,15 +10,20 @@ step, evaluates the three stable steps of the coupled step's rule, dt = min(dt_E
 (:meth:`blastfsi.cfdmp.method.Cfdmp.advance`):
 
 * dt_E, the Eulerian grid's CFL step (:func:`blastfsi.euler.step.stable_dt`; HLLC-MUSCL:
-  cfl dx / max_cells sum_d (|u_d| + c)), over every cell the grid holds, the fictitious box cells included;
+  cfl dx / max_cells sum_d (|u_d| + c)), over the cells the coupled step reads it from: once coupled, the
+  fictitious box cells only next to the scheme's own (entries before ``shipped_full_owned_cells`` took every
+  cell the grid holds, the deeper fictitious ones included, which the run's step does not read);
 * dt_M over the structure particles, and dt_M over the gas particles (:func:`blastfsi.mpm.musl.stable_dt`:
-  cfl h / max_p (|v_p| + s_p + sqrt(s_p^2 + c_p^2)), s the bulk viscosity's signal speed);
+  cfl h / max_p (|v_p| + a_p), a_p = s_p + sqrt(s_p^2 + c_p^2), s the bulk viscosity's signal speed, a gas
+  particle's a_p that of the mixture its nodes carry, :func:`blastfsi.mpm.musl.mixture_signal`);
 
 and names the smallest (the step taken is the time left to ``time.end`` in the fewest equal steps no
 longer than it, :func:`blastfsi.timeloop.step_to`), with the cell or particle that sets it (its kind,
 density, speed, sound speed, position). Beside them, the steps of what the physics needs: the steel's own,
 and the resolved gas's (cells and gas particles denser than RESOLVED x the ambient density, the median of
-the grid at the start).
+the grid at the start; ``dt_gas_resolved``: the step the run's rule would give if only the resolved gas
+counted). Beside the rule, each gas particle's own signal |v_p| + a_p (``dt_gas_own``, ``dt_gas_resolved_own``:
+the stricter measure, and the one of the entries before ``shipped_full_owned_cells``).
 
 The per-step rows are summarised (which limit set how many steps; the steps the needed step would take over
 the same time, sum dt / dt_needed) and sampled every ``--every`` steps into the JSON file, one entry per
@@ -39,8 +44,8 @@ import numpy as np
 from blastfsi import api, runtime
 from blastfsi import method as methods
 from blastfsi.cfdmp import coupling as cp
-from blastfsi.euler.step import _bad_and_speed
-from blastfsi.mpm.musl import VOID_DENSITY
+from blastfsi.euler.step import _bad_and_speed, _with_face_neighbours
+from blastfsi.mpm.musl import VOID_DENSITY, mixture_signal
 from blastfsi.mpm.viscosity import signal_speed
 from blastfsi.scenario import expand
 from blastfsi.method import compiled_advance
@@ -56,10 +61,12 @@ def budget_of(s, params, static, rho_resolved):
     """The stable steps of state ``s`` (one member) and what sets each (traced)."""
     cs = static.coupling
     cfg, mcfg = cs.euler, cs.mpm
-    _, rate = _bad_and_speed(s.U, params.euler, cfg)
-    rate = rate.reshape(-1)
-    prim = cp.flat_primitives(s.U, params.euler.eos, cfg)
     lay = params.layout
+    _, rate = _bad_and_speed(s.U, params.euler, cfg)
+    # the cells whose signal the coupled step's rule reads (Cfdmp.advance's stable_dt): once coupled, the
+    # fictitious box cells only next to the scheme's own cells
+    rate = jnp.where(_with_face_neighbours(~lay.fictitious | ~s.coupled), rate, 0.0).reshape(-1)
+    prim = cp.flat_primitives(s.U, params.euler.eos, cfg)
     # 0: Eulerian-only, 1: bridge, 2: fictitious
     cell_kind = jnp.where(lay.outside.reshape(-1), 0, jnp.where(lay.fictitious.reshape(-1), 2, 1))
     cfl_e = jnp.asarray(params.euler.cfl, s.U.dtype)
@@ -73,11 +80,15 @@ def budget_of(s, params, static, rho_resolved):
     h = mcfg.grid.cell_size
     prm = params.mpm
     speed_v = jnp.sqrt(jnp.sum(P.v * P.v, axis=1))
-    signal = signal_speed(P.wave_speed, speed_v, P.vol_rate, h, prm.q_quadratic, prm.q_linear)
     slot = jnp.arange(P.active.shape[0])
     structure = P.active & (slot < cs.n_structure)
     gas = P.active & (slot >= cs.n_structure)
     gas_resolved = gas & (P.point.density > rho_resolved)
+    # the MPM step's rule (mpm.musl.stable_dt): |v| plus the wave signal, a gas particle's that of the mixture its
+    # nodes carry (mpm.musl.mixture_signal); beside it each gas particle's own signal (the stricter)
+    own = signal_speed(P.wave_speed, 0.0, P.vol_rate, h, prm.q_quadratic, prm.q_linear)
+    signal = speed_v + jnp.where(gas, mixture_signal(P, own, mcfg), own)
+    signal_own = speed_v + own
 
     def fastest(mask, values):
         k = jnp.argmax(jnp.where(mask, values, 0.0))
@@ -87,6 +98,8 @@ def budget_of(s, params, static, rho_resolved):
     _, v_s_elastic = fastest(structure, P.wave_speed + speed_v)  # c_L + |v| without the bulk viscosity
     k_g, v_g = fastest(gas, signal)
     k_gr, v_gr = fastest(gas_resolved, signal)
+    _, v_g_own = fastest(gas, signal_own)
+    _, v_gr_own = fastest(gas_resolved, signal_own)
     dt_s = prm.cfl * h / v_s
     dt_g = prm.cfl * h / v_g
     faster_than_steel = jnp.sum(gas & (signal > v_s))
@@ -106,6 +119,7 @@ def budget_of(s, params, static, rho_resolved):
         dt_euler=cfl_e * cfg.dx / rate[k_e], dt_euler_resolved=cfl_e * cfg.dx / rate[k_er],
         dt_structure=dt_s, dt_structure_elastic=prm.cfl * h / v_s_elastic,
         dt_gas=dt_g, dt_gas_resolved=prm.cfl * h / v_gr,
+        dt_gas_own=prm.cfl * h / v_g_own, dt_gas_resolved_own=prm.cfl * h / v_gr_own,
         euler_cell=cell(k_e), euler_resolved_cell=cell(k_er),
         structure_particle=particle(k_s), gas_particle=particle(k_g), gas_resolved_particle=particle(k_gr),
         gas_particles=jnp.sum(gas), void_gas_particles=jnp.sum(gas & (P.point.density < VOID_DENSITY)),
@@ -174,6 +188,7 @@ def summarise(rows, final, steps, every, rho_ambient, loop_s, diag_s, example, e
     limits = np.array([[r["dt_euler"], r["dt_structure"], r["dt_gas"]] for r in rows])
     setter = np.argmin(limits, axis=1)
     needed = np.array([min(r["dt_structure"], r["dt_euler_resolved"], r["dt_gas_resolved"]) for r in rows])
+    needed_own = np.array([min(r["dt_structure"], r["dt_euler_resolved"], r["dt_gas_resolved_own"]) for r in rows])
     steel = np.array([r["dt_structure"] for r in rows])
     kinds = ("Eulerian-only", "bridge", "fictitious")
     euler_set = [r["euler_cell"] for r, k in zip(rows, setter) if k == 0]
@@ -186,6 +201,8 @@ def summarise(rows, final, steps, every, rho_ambient, loop_s, diag_s, example, e
         "steps_at_needed_step": float(np.sum(dt / needed)),
         "steps_at_steel_step": float(np.sum(dt / steel)),
         "ratio_steps_to_needed": float(len(rows) / np.sum(dt / needed)),
+        "steps_at_needed_step_own_signal": float(np.sum(dt / needed_own)),
+        "ratio_steps_to_needed_own_signal": float(len(rows) / np.sum(dt / needed_own)),
         "coupled_time": float(np.sum(dt)),
         "end_time": final["t"], "centre_displacement_end": final["centre_displacement"],
         "rows": [r for i, r in enumerate(rows) if i % every == 0 or i == len(rows) - 1],
