@@ -23,11 +23,13 @@ import argparse
 import collections
 import glob
 import gzip
+import importlib
 import json
 import os
 import platform
 import re
 import shutil
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -35,8 +37,12 @@ from pathlib import Path
 os.environ.setdefault("BLASTFSI_NO_CACHE", "1")  # (the scopes change the compiled code: no stale cache entry)
 
 import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
+from blastfsi import method as methods, simulation  # noqa: E402
+from blastfsi.api import load  # noqa: E402
+from blastfsi.scenario import expand  # noqa: E402
 from machine import cpu_model  # noqa: E402
 
 # (module, attribute, label): the functions whose kernels are grouped. A function is wrapped where it is
@@ -70,11 +76,6 @@ SCOPES = [
 def add_scopes() -> list:
     """Wrap every SCOPES function, where it is defined and wherever it was imported by name; returns the
     labels in use."""
-    import importlib
-    import sys
-
-    from blastfsi import method as methods
-
     for name in methods.available():  # every method's modules loaded, so that every importer is found
         methods.get(name)
     for module, attr, label in SCOPES:
@@ -114,12 +115,6 @@ def kernel_times(trace_dir: str) -> collections.Counter:
 
 def profile(example: str, at: float, steps: int, repeats: int) -> dict:
     labels = add_scopes()
-    import jax.numpy as jnp
-
-    from blastfsi import method as methods, simulation
-    from blastfsi.api import load
-    from blastfsi.scenario import expand
-
     jax.config.update("jax_enable_x64", True)
     sc, _, scs = expand(load(example, set={"output.history_samples": 401}))
     method, _, static, state, params = simulation.prepare(sc, scs)
