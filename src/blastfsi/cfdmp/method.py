@@ -335,7 +335,7 @@ class Cfdmp:
             budget = budget._replace(boundary_out=budget.boundary_out + cp.boundary_outflow(T, cs, lay))
             ms, res, budget = cp.feed(ms, res, budget, cp.flat_primitives(U, eos, cfg), eos, params.mpm, cs, lay)
             rows, gas_volume = cp.gas_rows(ms.particles, cs)
-            U = cp.fictitious(U, rows, gas_volume, lay)
+            U = cp.fictitious(U, rows, gas_volume, lay, s.U)
             return (s._replace(U=U, mpm=ms, reservoirs=res, budget=budget), cp.view(U, rows, gas_volume, lay))
 
         def step(s, dt):
@@ -821,7 +821,7 @@ def _activate(s: State, params: Params, cs: cp.Static) -> State:
     created = (system_totals(s.U, ms.particles, s.reservoirs, lay, cs)[2]
                - system_totals(s.U, s.mpm.particles, s.reservoirs, lay, cs)[2])
     rows, gas_mass = cp.gas_rows(ms.particles, cs)
-    U = cp.fictitious(s.U, rows, gas_mass, lay)
+    U = cp.fictitious(s.U, rows, gas_mass, lay, s.U)
     baseline = system_totals(U, ms.particles, s.reservoirs, lay, cs)[0]
     budget = s.budget._replace(required=required.astype(jnp.int32))
     return s._replace(U=U, mpm=ms, budget=budget, coupled=jnp.asarray(True), baseline=baseline,
