@@ -156,6 +156,22 @@ def test_a_collapsed_step_names_its_fastest_signal(shock):
     assert float(message.split()[2]) == pytest.approx(fastest, rel=1e-3), message  # (printed to 4 digits)
 
 
+def test_a_non_physical_cell_is_named_with_its_region_and_state(shock):
+    """A run stopped on a non-physical cell names the cell, where it is, its region (Eulerian, bridge or
+    fictitious) and its state."""
+    coupled, _ = shock
+    member = jax.tree_util.tree_map(lambda a: np.asarray(a)[0], coupled.state)
+    setup = coupled.setups[0]
+    for region, cell in (("an Eulerian cell", int(np.argmax(setup.outside))),
+                         ("a bridge cell", int(np.argmax(~setup.outside & ~setup.fictitious))),
+                         ("a fictitious cell", int(np.argmax(setup.fictitious)))):
+        U = np.array(member.U)
+        U[-1, cell] = -1.0  # a negative total energy: p < 0
+        message = coupled.method.locate_fault(member._replace(U=U), setup)
+        assert message.startswith(f"cell ({cell},) at x = ") and region in message, message
+        assert "density" in message and "pressure -" in message, message
+
+
 @pytest.mark.slow  # default-suite time (< 10 min on 2 cores)
 def test_strong_shock_leaves_the_mpm_region():
     """A 500:1 shock (13 MPa, like the he-slab-2d blast at its gauges) crosses the box and leaves it into the

@@ -230,6 +230,8 @@ def test_interrupted_mid_chunk_then_restarted_is_bit_for_bit(tmp_path, monkeypat
 
 # -------------------------------------------------------------------------------------------------- a fault
 def test_fault_keeps_the_history_and_marks_the_summary_failed(tmp_path):
+    """A run stopped on a non-physical state keeps its history to the fault, marks the summary failed and writes
+    the faulted state's fields as the last snapshot of the series (where it went wrong, for ParaView)."""
     # no artificial viscosity: the captured shock rings until an energy goes negative (0.65 ms), after 3 checkpoints
     data = tiny("lagrangian1d", **{"numerics.K1": 0.0, "numerics.K2": 0.0, "numerics.cfl": 1.0,
                                    "time.dt_min_fraction": 0.0})
@@ -240,6 +242,15 @@ def test_fault_keeps_the_history_and_marks_the_summary_failed(tmp_path):
     t_fault = float(str(err.value).split("t = ")[1].split()[0])
     hist = read_history(tmp_path / "history.csv")
     assert 0.0 < summary["time"] <= hist["time"][-1] <= t_fault
+    written = str(err.value).split("fields at the fault (t = ")[1].split(")")[0]
+    assert float(written.split()[0]) == pytest.approx(t_fault, rel=1e-8)
+    times = Series(tmp_path / "fields" / "member0.xdmf").times
+    assert times[-1] == pytest.approx(t_fault, rel=1e-8) and times[-2] < times[-1]
+    snapshot = str(err.value).split("s): ")[1].split(";")[0]
+    with h5py.File(snapshot) as f:  # the faulted state: a non-positive energy or a non-finite value somewhere
+        fields = f["member0"]
+        assert "pressure" in fields and not np.all(np.isfinite(fields["pressure"][()]) &
+                                                   (fields["internal_energy"][()] > 0.0))
 
 
 # ------------------------------------------------------------------------- SIGKILL, then --restart: bit for bit

@@ -449,7 +449,8 @@ def _run(sc: ScenarioBase, members: list[dict], member_scs: list, source: Path |
                         continue
                     stop = _stop_reason(state, method, setups, sc)
                     if stop is not None:  # (the history up to it is kept, as are the snapshots and checkpoints)
-                        raise SimulationError(f"{stop}; {rec.failed(xla.to_host(state), stop)}")
+                        kept = rec.failed(xla.to_host(state), stop, setups, len(field_times))
+                        raise SimulationError(f"{stop}; {kept}")
                     bar.update(float(np.min(np.asarray(state.t))), int(np.max(np.asarray(state.step))))
                 if ctrl_c.pressed and np.any(np.asarray(state.t) < t_stop):
                     break
@@ -583,14 +584,23 @@ class _Recorder:
         self.summary = summary
         results.write_summary(self.out, summary)
 
-    def failed(self, host, reason: str) -> str:
-        """The history up to a fault, and the last summary marked failed; returns what is kept, for the error."""
+    def failed(self, host, reason: str, setups: list, index: int) -> str:
+        """The history up to a fault, the fields of the faulted state (snapshot ``index``, past every scheduled
+        one, the last of the series: where the run went wrong, for ParaView) and the last summary marked
+        failed; returns what is kept, for the error."""
         where = f"last checkpoint: {self.last_ckpt}" if self.last_ckpt else "no checkpoint written yet"
         if self.out is None:
             return where
-        self._append_history(host)
-        results.write_summary(self.out, {**self.summary, "status": "failed", "error": reason})
-        return f"history to the fault: {', '.join(map(str, self.histories))}; {where}"
+        t = float(np.min(np.asarray(host.t)))
+        try:
+            with np.errstate(all="ignore"):  # (the faulted state holds the non-physical values it is written for)
+                self.snapshot(index, t, host, setups)
+            files = sorted(str(p) for p in (self.out / "fields").glob(f"*{index:04d}*.h5"))
+            fields = f"fields at the fault (t = {t:.9g} s): {', '.join(files)}"
+        except Exception as err:  # (a snapshot that cannot be made must not hide the fault's own report)
+            fields = f"no fields at the fault ({type(err).__name__}: {err})"
+        self.update(host, setups, {**self.summary, "status": "failed", "error": reason})
+        return f"history to the fault: {', '.join(map(str, self.histories))}; {fields}; {where}"
 
     def _append_history(self, host) -> None:
         for k, (file, hist) in enumerate(zip(self.histories, np.asarray(host.hist))):

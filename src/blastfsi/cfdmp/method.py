@@ -113,6 +113,18 @@ def _cast(tree, dtype):
                                                                                     jnp.floating) else a, tree)
 
 
+def _axis_names(grid) -> tuple:
+    return ("r", "z") if grid.geometry == "axisymmetric" else AXES
+
+
+def _cell_at(setup: problem.Setup, idx) -> str:
+    """'cell (i, j) at r = .. m, z = .. m' (x, y, z on Cartesian grids) of an Eulerian cell index."""
+    g = setup.euler.grid
+    centre = ", ".join(f"{a} = {g.lower[d] + (i + 0.5) * g.dx:.6g} m"
+                       for d, (a, i) in enumerate(zip(_axis_names(g), idx)))
+    return f"cell {tuple(int(i) for i in idx)} at {centre}"
+
+
 def _pad3(a: np.ndarray) -> np.ndarray:
     a = np.atleast_2d(np.asarray(a, float))
     return np.pad(a, ((0, 0), (0, 3 - a.shape[1])))
@@ -457,10 +469,12 @@ class Cfdmp:
         g = setup.euler.grid
         if flat >= 0:
             idx = np.unravel_index(flat, g.shape)
-            centre = ", ".join(f"{a} = {g.lower[k] + (i + 0.5) * g.dx:.6g} m" for k, (a, i) in
-                               enumerate(zip(AXES, idx)))
-            where = "a fictitious cell (from the particles)" if setup.fictitious[idx] else "an Eulerian cell"
-            return f"cell {tuple(int(i) for i in idx)} at {centre}, {where}"
+            prim = ek.primitives(U, prm.euler, cs.euler)
+            where = ("a fictitious cell (from the particles)" if setup.fictitious[idx] else
+                     "an Eulerian cell" if setup.outside[idx] else "a bridge cell")
+            return (f"{_cell_at(setup, idx)}, {where} (density {float(np.asarray(prim['rho'])[idx]):.4g} kg/m^3, "
+                    f"pressure {float(np.asarray(prim['pressure'])[idx]):.4g} Pa, specific internal energy "
+                    f"{float(np.asarray(prim['internal_energy'])[idx]):.4g} J/kg)")
         ms = jax.tree_util.tree_map(jnp.asarray, state.mpm)
         k = int(mpm.first_fault(ms, cs.mpm))
         if k >= 0:
@@ -480,16 +494,13 @@ class Cfdmp:
         P = state.mpm.particles
         part_speed = particle_signal_speed(P)
         k = int(np.argmax(part_speed))
-        axes = ("r", "z") if g.geometry == "axisymmetric" else AXES
         if cell_speed.reshape(-1)[flat] >= part_speed[k]:
             idx = np.unravel_index(flat, g.shape)
-            centre = ", ".join(f"{a} = {g.lower[d] + (i + 0.5) * g.dx:.6g} m"
-                               for d, (a, i) in enumerate(zip(axes, idx)))
             state_of = {key: float(np.asarray(prim[key])[idx]) for key in ("rho", "pressure", "products_fraction")}
-            return (f"fastest signal {cell_speed[idx]:.4g} m/s in cell {tuple(int(i) for i in idx)} at {centre} "
+            return (f"fastest signal {cell_speed[idx]:.4g} m/s in {_cell_at(setup, idx)} "
                     f"(density {state_of['rho']:.4g} kg/m^3, pressure {state_of['pressure']:.4g} Pa, products "
                     f"mass fraction {state_of['products_fraction']:.3g})")
-        where = ", ".join(f"{a} = {float(c):.6g} m" for a, c in zip(axes, np.asarray(P.x)[k, :g.ndim]))
+        where = ", ".join(f"{a} = {float(c):.6g} m" for a, c in zip(_axis_names(g), np.asarray(P.x)[k, :g.ndim]))
         return (f"fastest signal {part_speed[k]:.4g} m/s in particle {k} ({setup.materials[int(P.material[k])]}) "
                 f"at {where} (density {float(P.point.density[k]):.4g} kg/m^3, specific internal energy "
                 f"{float(P.point.energy[k]):.4g} J/kg)")
