@@ -321,6 +321,25 @@ def test_a_read_fictitious_cell_without_gas_keeps_its_last_state(shock):
     assert np.any(after.U[:, bridge] != member.U[:, bridge])
 
 
+def test_a_pool_waiting_for_its_activation_keeps_room_for_it(shock):
+    """Before the coupling starts (a stand-off charge's blast still on its way) a pool needs what the activation
+    will make, the structures and the box's gas, not the few particles in use: packed to those, it had to grow
+    again at the activation (two compilations of the loop for nothing). Once coupled, the particles in use."""
+    from blastfsi import method as methods
+    from blastfsi.simulation import _members
+
+    cfdmp = methods.get("cfdmp")
+    coupled = shock[0]
+    setup, member = coupled.setups[0], _members(coupled.state)[0]
+    c = setup.coupling
+    P = member.mpm.particles
+    empty = member._replace(mpm=member.mpm._replace(particles=P._replace(active=np.zeros_like(P.active))),
+                            budget=member.budget._replace(required=np.zeros_like(member.budget.required)))
+    assert c.activation_particles > 0 and c.pool_margin > 0
+    assert cfdmp.pool_needed(empty._replace(coupled=np.asarray(False)), setup) == c.activation_particles + c.pool_margin
+    assert cfdmp.pool_needed(empty._replace(coupled=np.asarray(True)), setup) == c.pool_margin
+
+
 def test_a_mostly_empty_pool_is_packed_only_when_the_steps_left_repay_the_compilation():
     """SHRINK x the slots to two significant digits, once GROWTH x the need fits there, and only when the steps
     left x the slots removed exceed PACK_SLOT_STEPS (a compilation's cost in slot-steps); the pool is looked at

@@ -75,6 +75,7 @@ class Coupling:
     activation_overpressure: float  # mpm_region.activation_overpressure [Pa]: starts the coupling (0: at once)
     capacity_grows: bool  # the pool grows when full (numerics.capacity not set and some face coupled)
     pool_margin: int  # a growing pool is full when fewer slots are free than one step can fill
+    activation_particles: int  # the structures' and the box's initial gas particles: what activation makes
     tracers: tuple  # structure particle of each output.tracers point
     coupled_faces: tuple  # "lower x", "upper y", ... the box faces coupled to the Eulerian grid
 
@@ -362,7 +363,7 @@ def build(sc: CfdmpScenario, devices: int = 1) -> Setup:
         q_quadratic=sc.numerics.q_quadratic, q_linear=sc.numerics.q_linear,
         mpm_reference_pressure=sc.numerics.reference_pressure,
         activation_overpressure=box.activation_overpressure, capacity_grows=grows, pool_margin=pool_margin,
-        tracers=tuple(tracers), coupled_faces=tuple(f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
+        activation_particles=n_struct + at_start, tracers=tuple(tracers), coupled_faces=tuple(f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
                                                     for f in faces))
     return Setup(euler=esetup, grid=grid, materials=tuple(names), models=tuple(models), model_params=tuple(params),
                  gas_material=tuple(gas_material), structures=structures, body=body, capacity=int(capacity),
