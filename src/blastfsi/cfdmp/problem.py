@@ -363,8 +363,8 @@ def build(sc: CfdmpScenario, devices: int = 1) -> Setup:
         q_quadratic=sc.numerics.q_quadratic, q_linear=sc.numerics.q_linear,
         mpm_reference_pressure=sc.numerics.reference_pressure,
         activation_overpressure=box.activation_overpressure, capacity_grows=grows, pool_margin=pool_margin,
-        activation_particles=n_struct + at_start, tracers=tuple(tracers), coupled_faces=tuple(f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}"
-                                                    for f in faces))
+        activation_particles=n_struct + at_start, tracers=tuple(tracers),
+        coupled_faces=tuple(f"{'lower' if f.side == 0 else 'upper'} {AXES[f.axis]}" for f in faces))
     return Setup(euler=esetup, grid=grid, materials=tuple(names), models=tuple(models), model_params=tuple(params),
                  gas_material=tuple(gas_material), structures=structures, body=body, capacity=int(capacity),
                  devices=devices, box_lo=lo, box_hi=hi, faces=tuple(faces), fictitious=core, parked=core & clear,
