@@ -358,6 +358,7 @@ def test_a_mostly_empty_pool_is_packed_only_when_the_steps_left_repay_the_compil
     assert pool_check_steps(50_000, 25_264) == 100 and pool_check_steps(400, 600) == 5000
 
 
+@pytest.mark.slow  # default-suite time; the packing itself (resize) and its rule (shrunk_capacity) stay in it
 def test_a_mostly_empty_pool_shrinks_and_the_run_goes_on(shock, tmp_path, monkeypatch):  # (shock: its loop)
     """A pool of 20 x the box's gas (numerics.pool_headroom) is packed into fewer slots once the driver sees it
     mostly empty (looked at every POOL_CHECK_STEPS steps and the compilation cost waived, once, mid-run: the
