@@ -113,15 +113,16 @@ def _cast(tree, dtype):
                                                                                     jnp.floating) else a, tree)
 
 
-def _axis_names(grid) -> tuple:
-    return ("r", "z") if grid.geometry == "axisymmetric" else AXES
+def _axis_names(geometry: str) -> tuple:
+    """The axes' names of a domain geometry: r, z on an r-z grid, else x, y, z."""
+    return ("r", "z") if geometry == "axisymmetric" else AXES
 
 
 def _cell_at(setup: problem.Setup, idx) -> str:
     """'cell (i, j) at r = .. m, z = .. m' (x, y, z on Cartesian grids) of an Eulerian cell index."""
     g = setup.euler.grid
     centre = ", ".join(f"{a} = {g.lower[d] + (i + 0.5) * g.dx:.6g} m"
-                       for d, (a, i) in enumerate(zip(_axis_names(g), idx)))
+                       for d, (a, i) in enumerate(zip(_axis_names(g.geometry), idx)))
     return f"cell {tuple(int(i) for i in idx)} at {centre}"
 
 
@@ -507,7 +508,8 @@ class Cfdmp:
             return (f"fastest signal {cell_speed[idx]:.4g} m/s in {_cell_at(setup, idx)} "
                     f"(density {state_of['rho']:.4g} kg/m^3, pressure {state_of['pressure']:.4g} Pa, products "
                     f"mass fraction {state_of['products_fraction']:.3g})")
-        where = ", ".join(f"{a} = {float(c):.6g} m" for a, c in zip(_axis_names(g), np.asarray(P.x)[k, :g.ndim]))
+        where = ", ".join(f"{a} = {float(c):.6g} m"
+                          for a, c in zip(_axis_names(g.geometry), np.asarray(P.x)[k, :g.ndim]))
         return (f"fastest signal {part_speed[k]:.4g} m/s in particle {k} ({setup.materials[int(P.material[k])]}) "
                 f"at {where} (density {float(P.point.density[k]):.4g} kg/m^3, specific internal energy "
                 f"{float(P.point.energy[k]):.4g} J/kg)")
@@ -600,7 +602,7 @@ class Cfdmp:
         from blastfsi.plotting.units import scale, text
 
         folder.mkdir(parents=True, exist_ok=True)
-        labels = ("r", "z") if sc.domain.geometry == "axisymmetric" else AXES
+        labels = _axis_names(sc.domain.geometry)
         if sc.output.gauges:
             gauge_histories(folder / "gauges.png", histories, sc.output.gauges)
         if sc.output.tracers:
