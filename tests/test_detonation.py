@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 import blastfsi
+from blastfsi.detonation.cj import chapman_jouguet
 from blastfsi.lagrangian1d import scheme
 from blastfsi.lagrangian1d.charge_problem import charge_radius, graded_nodes
+from blastfsi.materials import lookup
 from blastfsi.scenario import ScenarioError, parse
 
 RHO_TNT = 1630.0  # seed 000 Sec. 4.1
@@ -146,6 +148,32 @@ def test_charge_outside_domain_and_unknown_explosive_are_rejected():
         blastfsi.run(charge_data(charge__explosive="semtex"))
     with pytest.raises(ScenarioError, match="not an explosive"):
         blastfsi.run(charge_data(charge__explosive="air"))
+
+
+def test_the_explosives_constants_can_be_overridden_and_nothing_else():
+    """``[materials.<explosive>]`` reaches the charge: the detonation energy it books and the CJ pressure it
+    checks the burn against are those of the overridden constants. An override of a material the run does
+    not use is refused by its key (the ambient gas is ``[gas]``), as it is for the plate problems."""
+    short = {"time__end": 2e-5, "output__gauges": []}
+    base = blastfsi.run(charge_data(**short))
+    hot = blastfsi.run(charge_data(**short, materials={"tnt": {"E0": 1.2 * E0_TNT}}))
+    volume = 1.0 / RHO_TNT  # the 1 kg charge
+    assert base.setups[0].charge.explosive_energy == pytest.approx(E0_TNT * volume, rel=1e-12)
+    assert hot.setups[0].charge.explosive_energy == pytest.approx(1.2 * E0_TNT * volume, rel=1e-12)
+    hx = lookup("tnt", {"E0": 1.2 * E0_TNT})
+    assert hot.summary["cj_pressure"] == pytest.approx(chapman_jouguet(hx.eos_params(), hx.E0).pressure, rel=1e-12)
+    assert hot.summary["cj_pressure"] > base.summary["cj_pressure"]
+    internal = [r.setups[0].charge.measure * float(np.sum(r.setups[0].zone_mass * r.setups[0].e)) for r in (base, hot)]
+    assert internal[1] - internal[0] == pytest.approx(0.2 * E0_TNT * volume, rel=1e-9)  # what the zones start with
+    with pytest.raises(ScenarioError, match="materials.air: overrides a material this scenario does not use"):
+        parse(charge_data(materials={"air": {"gamma": 1.3}}))
+    with pytest.raises(ScenarioError, match="materials.tnt.E0"):
+        parse(charge_data(materials={"tnt": {"E0": -1.0}}))
+    plate = {"method": "lagrangian1d", "name": "t-plate", "incident": {"profile": "uniform", "overpressure": 1e5},
+             "plate": {"fixed": True}, "domain": {"length": 1.0}, "grid": {"cells": 50},
+             "time": {"end": 1e-4}, "materials": {"tnt": {"E0": E0_TNT}}}
+    with pytest.raises(ScenarioError, match="materials.tnt: overrides a material this scenario does not use"):
+        parse(plate)
 
 
 def test_plate_problem_without_charge_still_needs_a_plate():

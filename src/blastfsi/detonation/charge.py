@@ -62,7 +62,7 @@ from blastfsi.detonation import remap as rm
 from blastfsi.euler.config import MIN_CELLS, BlastTable
 from blastfsi.euler.scenario import faces_toward
 from blastfsi.exact import kingery_bulmash as kb
-from blastfsi.materials.gases import GASES, JWLExplosive
+from blastfsi.materials.gases import JWLExplosive
 from blastfsi.lagrangian1d.charge_problem import charge_mass, charge_radius, explosive
 from blastfsi.lagrangian1d.method import METHOD as LAGRANGIAN1D
 from blastfsi.scenario import AXES, ScenarioError, material, parse
@@ -113,8 +113,8 @@ class ChargeFields(NamedTuple):
 
 
 def _explosive(sc) -> JWLExplosive:
-    explosive(sc.initial.explosive, "initial.explosive")  # a JWL explosive of the library (else ScenarioError)
-    return material(sc.materials, sc.initial.explosive, "initial.explosive")
+    """The charge's JWL explosive, the scenario's ``[materials]`` overrides applied (else ScenarioError)."""
+    return explosive(sc.initial.explosive, "initial.explosive", sc.materials.get(sc.initial.explosive))
 
 
 def _ambient(sc):
@@ -166,12 +166,13 @@ def limit_radius(sc, g, centre, mirrors, radius_1d: float) -> float:
 
 
 def arrival_time(init, hx, mass_full: float, radius: float, gas: dict, length: float, c0: float, j: int,
-                 r_probe: float, level: float) -> float:
+                 r_probe: float, level: float, overrides: dict | None = None) -> float:
     """The time the 1D blast's overpressure first exceeds ``level`` p0 at ``r_probe`` (a 1D run with a gauge
-    there, to the end times of :func:`probe_times`); ScenarioError if it never does."""
+    there, to the end times of :func:`probe_times`; ``overrides``: the explosive's, :func:`one_d_scenario`);
+    ScenarioError if it never does."""
     for t_probe in probe_times(init.explosive, mass_full, r_probe, c0, radius / hx.detonation_velocity, j):
         probe = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length, t_probe,
-                                            gas, [r_probe], level, j))
+                                            gas, [r_probe], level, j, overrides=overrides))
         probe.advance_to(t_probe)
         if probe.arrival(0) is not None:
             return probe.arrival(0)
@@ -181,12 +182,15 @@ def arrival_time(init, hx, mass_full: float, radius: float, gas: dict, length: f
 
 def one_d_scenario(explosive: str, radius: float, cells: int, air_ratio: float, length: float, t_end: float,
                    gas: dict, gauges: list | None = None, arrival_fraction: float = 0.01, j: int = 2,
-                   history_samples: int = 2) -> dict:
+                   history_samples: int = 2, overrides: dict | None = None) -> dict:
     """The ``lagrangian1d`` scenario of a charge's 1D detonation (:class:`Detonation1D`; ``blastfsi.run``
     runs it with a summary and history): a spherical (j = 2) or cylindrical (j = 1) charge of ``radius`` with
     ``cells`` zones across it, then uniform air zones ``air_ratio`` times as wide to ``length``, to
-    ``t_end``, gauges at the radii ``gauges``, ``history_samples`` rows of history."""
+    ``t_end``, gauges at the radii ``gauges``, ``history_samples`` rows of history; ``overrides``: the
+    multi-D scenario's ``[materials.<explosive>]``, so that the 1D detonation burns the explosive that the
+    grid's products then follow."""
     return {"method": LAGRANGIAN1D.name, "name": "charge-1d", "charge": {"explosive": explosive, "radius": radius},
+            "materials": {explosive: dict(overrides)} if overrides else {},
             "domain": {"geometry": GEOMETRY_1D[j], "length": length},
             "grid": {"cells": cells, "first_ratio": air_ratio, "max_ratio": air_ratio},
             "gas": gas, "time": {"end": t_end},
@@ -226,7 +230,7 @@ class Detonation1D:
         with runtime.precision("float64"):
             if self._advance is None:
                 ch = self.scenario.charge
-                mass = charge_mass(ch.radius, GASES[ch.explosive].density, self.setup.geometry)
+                mass = self.setup.charge.charge_mass
                 log.info(f"1D detonation of {mass:.4g} {'kg/m' if self.setup.geometry == 1 else 'kg'} "
                          f"{ch.explosive.upper()} to t = {t_end * 1e3:.4g} ms ({self.setup.explosive_zones} zones "
                          "across the charge radius)")
@@ -371,7 +375,8 @@ def charge_initial(sc, g) -> ChargeFields:
     for k, (r_probe, level) in enumerate(rules):
         length = 1.5 * r_lim + 10.0 * radius
         t_remap = init.remap_time if init.remap_time is not None else \
-            arrival_time(init, hx, mass_full, radius, gas, length, c0, j, r_probe, level)
+            arrival_time(init, hx, mass_full, radius, gas, length, c0, j, r_probe, level,
+                         sc.materials.get(init.explosive))
         if sc.time.end <= t_remap:
             raise ScenarioError(f"time.end = {sc.time.end:g} s counts from the detonation and must lie after the "
                                 f"remap time {t_remap:.6g} s (the blast reaches the limit radius {r_lim:.4g} m then)")
@@ -381,7 +386,8 @@ def charge_initial(sc, g) -> ChargeFields:
         # (without a blast layer: the probe's zoning and gauge, the same compiled 1D loop)
         t_start = max(t_remap, 1e-12)
         one_d = Detonation1D(one_d_scenario(init.explosive, radius, init.cells, init.air_ratio, length,
-                                            sc.time.end if mask.any() else t_start, gas, [r_probe], level, j))
+                                            sc.time.end if mask.any() else t_start, gas, [r_probe], level, j,
+                                            overrides=sc.materials.get(init.explosive)))
         one_d.advance_to(t_start)
         setup, profile = one_d.setup, one_d.profile()
         r_dist = rm.disturbed_radius(profile, rho_a, p_a / air.eos_params().omega)

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blastfsi.lagrangian1d.scheme import Boundaries, Numerics, zone_volume
-from blastfsi.materials import MaterialError, lookup
+from blastfsi.materials import LIBRARY, MaterialError, lookup
 from blastfsi.materials.gases import GASES, JWLExplosive
 from blastfsi.scenario import ScenarioError
 
@@ -94,15 +94,23 @@ class Setup:
         return self.zone_mass.size
 
 
-def explosive(name: str, field_name: str = "charge.explosive") -> JWLExplosive:
-    """The JWL explosive ``name`` from the material library; ScenarioError for anything else."""
+def explosive(name: str, field_name: str = "charge.explosive", overrides: dict | None = None) -> JWLExplosive:
+    """The JWL explosive ``name`` from the material library with the scenario's ``[materials.<name>]``
+    ``overrides`` applied; ScenarioError for anything else (an override out of range: naming it)."""
+    if name not in LIBRARY:
+        raise ScenarioError(f"{field_name}: unknown explosive {name!r}; available: {', '.join(EXPLOSIVES)}")
     try:
-        mat = lookup(name, field=field_name)
-    except MaterialError:
-        raise ScenarioError(f"{field_name}: unknown explosive {name!r}; available: {', '.join(EXPLOSIVES)}") from None
+        mat = lookup(name, overrides, field=field_name)
+    except MaterialError as err:
+        raise ScenarioError(str(err)) from None
     if not isinstance(mat, JWLExplosive):
         raise ScenarioError(f"{field_name}: {name!r} is not an explosive; available: {', '.join(EXPLOSIVES)}")
     return mat
+
+
+def charge_explosive(sc: Scenario) -> JWLExplosive:
+    """The explosive of the scenario's ``[charge]``, its ``[materials]`` overrides applied."""
+    return explosive(sc.charge.explosive, overrides=sc.materials.get(sc.charge.explosive))
 
 
 def charge_radius(mass: float, density: float, j: int) -> float:
@@ -136,7 +144,7 @@ def charge_size(sc: Scenario) -> tuple[float, float]:
     """(radius [m], mass [kg, kg/m or kg/m^2]) of the scenario's charge."""
     ch = sc.charge
     j = GEOMETRY[sc.domain.geometry]
-    hx = explosive(ch.explosive)
+    hx = charge_explosive(sc)
     radius = ch.radius if ch.radius is not None else charge_radius(ch.mass, hx.density, j)
     return radius, charge_mass(radius, hx.density, j)
 
@@ -144,7 +152,7 @@ def charge_size(sc: Scenario) -> tuple[float, float]:
 def build(sc: Scenario) -> Setup:
     ch = sc.charge
     j = GEOMETRY[sc.domain.geometry]
-    hx = explosive(ch.explosive)
+    hx = charge_explosive(sc)
     D = ch.detonation_velocity or hx.detonation_velocity
     radius, mass = charge_size(sc)
     if radius >= sc.domain.length:

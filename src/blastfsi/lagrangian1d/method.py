@@ -16,7 +16,6 @@ from blastfsi.lagrangian1d import charge_problem as detonation
 from blastfsi.lagrangian1d import plate_problem as plate1d
 from blastfsi.lagrangian1d import scheme
 from blastfsi.lagrangian1d.scenario import Scenario
-from blastfsi.materials import lookup
 from blastfsi.method import Polyline, register
 from blastfsi.scenario import device_count
 
@@ -173,7 +172,7 @@ def charge_summary(sc: Scenario, setup, hist: dict, state: scheme.State) -> dict
     per gauge, peak overpressure, positive impulse, arrival time (blast_maps definitions) beside
     the Kingery-Bulmash values for a spherical TNT charge."""
     charge = setup.charge
-    hx = lookup(sc.charge.explosive)
+    hx = detonation.charge_explosive(sc)
     cj = chapman_jouguet(hx.eos_params(), hx.E0)
     energy = float(scheme.total_energy(state, setup.boundaries))
     burnt = float(state.t) >= charge.charge_radius / charge.detonation_velocity

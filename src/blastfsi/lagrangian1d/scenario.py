@@ -15,7 +15,8 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Field, model_validator
 
-from blastfsi.lagrangian1d.charge_problem import GEOMETRY, charge_radius, explosive
+from blastfsi.lagrangian1d.charge_problem import GEOMETRY, charge_explosive, charge_radius
+from blastfsi.materials import check_overrides
 from blastfsi.scenario import Numerics as SharedNumerics
 from blastfsi.scenario import Output as SharedOutput
 from blastfsi.scenario import Demand, Devices, ScenarioBase, Strict, Sweep as SharedSweep, gauge_points
@@ -194,6 +195,9 @@ class Scenario(ScenarioBase):
     plate: Optional[Plate] = None
     domain: Domain
     grid: Grid
+    materials: dict[str, dict[str, float]] = Field(default_factory=dict, description=(
+        "overrides of the charge's explosive's library constants, e.g. {tnt = {E0 = 7.0e9}} (the ambient gas "
+        "is [gas])"))
     numerics: Numerics = Numerics()
     output: Output = Output()
     sweep: Optional[Sweep] = None
@@ -203,6 +207,7 @@ class Scenario(ScenarioBase):
         if (self.incident is None) == (self.charge is None):
             raise ValueError("give exactly one of [incident] (a blast on a plate, seed 002) and [charge] "
                              "(an explosive detonated at r = 0)")
+        check_overrides(self.materials, {} if self.charge is None else {self.charge.explosive: "charge.explosive"})
         if self.charge is not None:
             return self._charge_consistent()
         if self.plate is None:
@@ -237,7 +242,7 @@ class Scenario(ScenarioBase):
         return self
 
     def _charge_consistent(self):
-        explosive(self.charge.explosive)  # a JWL explosive of the library, within its ranges
+        charge_explosive(self)  # a JWL explosive of the library, within its ranges with the overrides
         if self.sweep is not None:
             raise ValueError("sweep: the plate sweeps need an [incident]; a [charge] run takes no sweep")
         if self.plate is not None and self.plate.beta_s is not None:
@@ -251,7 +256,8 @@ class Scenario(ScenarioBase):
         zones = float(self.grid.cells)
         if self.charge is not None:
             c, g = self.charge, self.grid
-            radius = c.radius or charge_radius(c.mass, explosive(c.explosive).density, GEOMETRY[self.domain.geometry])
+            j = GEOMETRY[self.domain.geometry]
+            radius = c.radius or charge_radius(c.mass, charge_explosive(self).density, j)
             zones += self.domain.length / (min(g.first_ratio, g.max_ratio) * radius / g.cells)
         return super().demands() + [Demand("grid.cells", zones, "zones", WORDS_PER_ZONE)]
 
