@@ -6,6 +6,7 @@ and the ConWep oblique-reflection blend (blastfsi.exact.oblique_reflection).
     python docs/figures/make_plate_load.py run DIR [--cases 1 4] [--cells 120 160 240 360]
     python docs/figures/make_plate_load.py figures DIR      # plate_load.json, plate_load.png here; tables on stdout
     python docs/figures/make_plate_load.py coupled DIR [--cases 1 4]  # the coupled solver's load; table on stdout
+    python docs/figures/make_plate_load.py energy DIR   # the load against the explosive's energy; plate_load_energy.json
 
 Set-up (r-z, ``domain.geometry = "axisymmetric"``): r in [0, 0.3] m (axis, flow-out at r = 0.3 m), z in
 [-0.08, 0.1] m (flow-out behind the charge, the rigid plate = a ``wall`` at z = 0.1 m); the charge centre at
@@ -25,6 +26,12 @@ shape, r < 0.28 m). The supports' reaction is the load's total impulse on the pl
 ambient pressure on the two cancels), and gauges half a cell in front of the face, at the cell centres nearest R_GAUGES, give the positive-phase impulse
 there (from the gas particles); against the ``euler`` run of the same cells (``DIR/case<k>-c120.json`` of ``run``:
 its wall cells' impulse, totalled over the same r < 0.28 m). Writes ``DIR/coupled-case<k>.json``.
+
+``energy``: how the load grows with the energy the products carry (what afterburning could add at most): the
+2.5 mm grid of ``run`` for each case with the explosive's JWL detonation energy E0 scaled by ENERGY_FACTORS
+(``materials.tnt.E0``, which the 1D detonation and the grid's products both take; the automatic remap time of
+each run). Writes ``DIR/energy-case<k>-x<factor>.json`` and ``plate_load_energy.json`` here (the axis impulse and
+the total over the free span, and their ratios to factor 1); the table on stdout.
 
 Per run (``DIR/<case>-c<cells>.json``): along the wall, per cell, the positive-phase impulse and the peak
 overpressure (the solver's per-step blast maps), the impulse to 0.5 ms (history, trapezoid), the
@@ -56,16 +63,22 @@ FIELD_EVERY = 1.0e-5
 PRODUCTS_CELLS = (240,)  # grids with snapshots every FIELD_EVERY (the products' share); the others: t = 0 and end
 R_GAUGES = (0.0, 0.025, 0.05, 0.075, 0.1, 0.15, 0.2, 0.25)
 CELLS = (120, 160, 240, 360)
+ENERGY_FACTORS = {"1": (1.0, 1.2, 1.5), "4": (1.0, 1.2)}  # E0 / E0 of the library's TNT, per case
+ENERGY_CELLS = 120
+JSON_ENERGY = HERE / "plate_load_energy.json"
 
 
-def scenario(mass: float, cells: int, remap_time: float | None) -> dict:
+def scenario(mass: float, cells: int, remap_time: float | None, energy_factor: float = 1.0) -> dict:
     dx = R_MAX / cells
     rc = (np.arange(cells) + 0.5) * dx
     init = {"kind": "charge", "explosive": "tnt", "mass": mass, "center": [0.0, 0.0], "cells": 100,
             "air_ratio": 2.0}
     if remap_time is not None:
         init["remap_time"] = remap_time
-    return {"method": "euler", "name": "plate-load",
+    from blastfsi.materials import lookup
+
+    materials = {} if energy_factor == 1.0 else {"tnt": {"E0": energy_factor * lookup("tnt").E0}}
+    return {"method": "euler", "name": "plate-load", "materials": materials,
             "domain": {"geometry": "axisymmetric", "lower": [0.0, Z_LO], "upper": [R_MAX, STANDOFF]},
             "boundaries": {"x": ["axis", "outflow"], "y": ["outflow", "wall"]},
             "grid": {"cells": cells}, "initial": init, "time": {"end": T_END},
@@ -91,12 +104,12 @@ def _trapz(y, x, axis=-1):
     return np.sum(0.5 * (y[tuple(s0)] + y[tuple(s1)]) * d.reshape(shape), axis=axis)
 
 
-def measure(case: str, cells: int, folder: Path, remap_time: float | None) -> dict:
+def measure(case: str, cells: int, folder: Path, remap_time: float | None, energy_factor: float = 1.0) -> dict:
     import blastfsi
 
     mass = CASES[case]
-    sc = scenario(mass, cells, remap_time)
-    out = folder / f"case{case}-c{cells}"
+    sc = scenario(mass, cells, remap_time, energy_factor)
+    out = folder / (f"case{case}-c{cells}" + ("" if energy_factor == 1.0 else f"-x{energy_factor:g}"))
     started = time.perf_counter()
     res = blastfsi.run(sc, out=out, overwrite=out.exists())
     total = time.perf_counter() - started
@@ -362,6 +375,31 @@ def cmd_coupled(folder: Path, cases) -> None:
         print("| cfdmp / euler | " + " | ".join(f"{a / b:.3f}" for a, b in zip(c["positive_impulse"], euler)) + " |")
 
 
+def cmd_energy(folder: Path) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    out = {"cells": ENERGY_CELLS, "dx": R_MAX / ENERGY_CELLS, "free_span_radius": A_FREE, "cases": {}}
+    print("| case | E0 factor | axis impulse [kPa s] | / factor 1 | J (r < 0.25 m) [N s] | / factor 1 | remap [us] |")
+    print("|---|---|---|---|---|---|---|")
+    for case, factors in ENERGY_FACTORS.items():
+        rows = []
+        for factor in factors:
+            path = folder / f"energy-case{case}-x{factor:g}.json"
+            if not path.exists():
+                d = measure(case, ENERGY_CELLS, folder, None, factor)
+                path.write_text(json.dumps(d))
+            d = json.loads(path.read_text())
+            rows.append({"energy_factor": factor, "axis_impulse": d["positive_impulse"][0],
+                         "span_impulse": _span_total(d["r"], d["dx"], d["positive_impulse"]),
+                         "remap_time": d["remap_time"], "steps": d["steps"]})
+        for row in rows:
+            row["axis_ratio"] = row["axis_impulse"] / rows[0]["axis_impulse"]
+            row["span_ratio"] = row["span_impulse"] / rows[0]["span_impulse"]
+            print(f"| {case} | {row['energy_factor']:g} | {row['axis_impulse'] / 1e3:.2f} | {row['axis_ratio']:.3f} | "
+                  f"{row['span_impulse']:.0f} | {row['span_ratio']:.3f} | {row['remap_time'] * 1e6:.2f} |")
+        out["cases"][case] = {"mass": CASES[case], "runs": rows}
+    JSON_ENERGY.write_text(json.dumps(out, indent=1))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -374,8 +412,12 @@ def main(argv=None) -> int:
     c = sub.add_parser("coupled")
     c.add_argument("dir", type=Path)
     c.add_argument("--cases", nargs="+", default=list(COUPLED_EXAMPLES), choices=list(COUPLED_EXAMPLES))
+    e = sub.add_parser("energy")
+    e.add_argument("dir", type=Path)
     a = ap.parse_args(argv)
-    if a.cmd == "run":
+    if a.cmd == "energy":
+        cmd_energy(a.dir)
+    elif a.cmd == "run":
         cmd_run(a.dir, a.cases, a.cells)
     elif a.cmd == "coupled":
         cmd_coupled(a.dir, a.cases)
