@@ -14,7 +14,7 @@ the test rig's clamp:
   ring (``--box-lower`` moves it for any clamp, for a baseline with the same box).
 
     python docs/figures/make_plate_table2.py run DIR [--cases 1 4] [--clamps fixed sliding] [--cells N] [--end T]
-        [--recess DEPTH] [--box-lower Z]
+        [--recess DEPTH] [--box-lower Z] [--set KEY=VALUE ...]
     python docs/figures/make_plate_table2.py figures DIR    # plate_table2.json, plate_table2.png here; table
     python docs/figures/make_plate_table2.py faces RESULTS  # plate_faces.json: the gas on the plate's two faces
 
@@ -27,7 +27,9 @@ Each run is its own process (``one``) and writes ``DIR/case<k>-<clamp>[-c<cells>
 deflection history (the tracer at mid-thickness on the axis), its peak and when, the last value, the steps, the
 loop time and the mass/energy budget residuals. ``--cells`` overrides the grid (the three-grid study of case 1:
 90, 120, 180 cells = 3.33, 2.5, 1.67 mm; the cell must divide 10 mm, which the plate's faces, its clamp and the
-MPM box's lower face are multiples of). ``run`` skips runs whose JSON exists.
+MPM box's lower face are multiples of). ``--set`` overrides scenario keys as ``blastfsi run --set`` does (e.g.
+``numerics.gas_pic_fraction=0``: pure FLIP gas particles); the runs' names end with them. ``run`` skips runs whose
+JSON exists.
 """
 from __future__ import annotations
 
@@ -87,25 +89,28 @@ def scenario(case: str, clamp: str, cells: int | None, end: float | None = None,
 
 
 def name(case: str, clamp: str, cells: int | None, end: float | None = None, recess: float = 0.025,
-         box_lower: float | None = None) -> str:
+         box_lower: float | None = None, overrides: tuple = ()) -> str:
     return (f"case{case}-{clamp}" + (f"{round(recess * 1e3)}mm" if clamp == "fixed-recess" else "")
             + ("" if cells is None else f"-c{cells}") + ("" if end is None else f"-e{round(end * 1e6)}us")
-            + ("" if box_lower is None else f"-box{round(box_lower * 1e3)}mm"))
+            + ("" if box_lower is None else f"-box{round(box_lower * 1e3)}mm")
+            + "".join(f"-{item.split('.')[-1].replace('=', '')}" for item in overrides))
 
 
 def cmd_one(case: str, clamp: str, cells: int | None, folder: Path, end: float | None = None, recess: float = 0.025,
-            box_lower: float | None = None) -> None:
+            box_lower: float | None = None, overrides: tuple = ()) -> None:
     """One run, written into DIR/<name>-run (so that a run stopped by a fault keeps its history: the JSON then
     holds the history to the fault and the reason, ``stopped``), summarised in DIR/<name>.json."""
     import blastfsi
     from blastfsi.io.results import read_history
+    from blastfsi.scenario import apply_overrides
     from blastfsi.simulation import SimulationError
 
-    label = name(case, clamp, cells, end, recess, box_lower)
+    label = name(case, clamp, cells, end, recess, box_lower, overrides)
     out_dir = folder / f"{label}-run"
     stopped = None
     try:
-        s = blastfsi.run(scenario(case, clamp, cells, end, recess, box_lower), out=out_dir, overwrite=True).summary
+        data = apply_overrides(scenario(case, clamp, cells, end, recess, box_lower), list(overrides))
+        s = blastfsi.run(data, out=out_dir, overwrite=True).summary
     except SimulationError as err:
         stopped, s = str(err), None
     h = read_history(out_dir / "history.csv")
@@ -113,7 +118,7 @@ def cmd_one(case: str, clamp: str, cells: int | None, folder: Path, end: float |
     w = np.asarray(h["tracer0_displacement_y"])
     k = int(np.argmax(w))
     out = {"case": case, "clamp": clamp, "cells": cells, "thickness": THICKNESS[case],
-           "recess": recess if clamp == "fixed-recess" else None, "box_lower": box_lower,
+           "recess": recess if clamp == "fixed-recess" else None, "box_lower": box_lower, "set": list(overrides),
            "peak": float(w[k]), "peak_time": float(t[k]), "last": float(w[-1]), "end_time": float(t[-1]),
            "steps": None if s is None else s["steps"], "loop_s": None if s is None else round(float(s["loop_time"]), 1),
            "mass_residual": None if s is None else s["budget"]["mass_residual_relative"],
@@ -126,15 +131,16 @@ def cmd_one(case: str, clamp: str, cells: int | None, folder: Path, end: float |
 
 
 def cmd_run(folder: Path, cases, clamps, cells, end: float | None = None, recess: float = 0.025,
-            box_lower: float | None = None) -> None:
+            box_lower: float | None = None, overrides: tuple = ()) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for case in cases:
         for clamp in clamps:
-            if (folder / f"{name(case, clamp, cells, end, recess, box_lower)}.json").is_file():
+            if (folder / f"{name(case, clamp, cells, end, recess, box_lower, overrides)}.json").is_file():
                 continue
             args = [sys.executable, __file__, "one", case, clamp, str(folder), "--recess", repr(recess)]
             args += ([] if cells is None else ["--cells", str(cells)]) + ([] if end is None else ["--end", repr(end)])
             args += [] if box_lower is None else ["--box-lower", repr(box_lower)]
+            args += [f"--set={item}" for item in overrides]
             subprocess.run(args, check=True)
 
 
@@ -250,6 +256,7 @@ def main(argv=None) -> int:
     one.add_argument("--end", type=float)
     one.add_argument("--recess", type=float, default=0.025)
     one.add_argument("--box-lower", type=float)
+    one.add_argument("--set", action="append", default=[])
     run = sub.add_parser("run")
     run.add_argument("dir", type=Path)
     run.add_argument("--cases", nargs="+", default=["1", "4"], choices=sorted(EXAMPLES))
@@ -258,15 +265,16 @@ def main(argv=None) -> int:
     run.add_argument("--end", type=float, help="time.end [s] (default: the example's; the sliding clamp peaks later)")
     run.add_argument("--recess", type=float, default=0.025, help="depth of the front clamping plate of fixed-recess [m]")
     run.add_argument("--box-lower", type=float, help="the MPM box's lower face z [m] (default: the example's)")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a scenario override")
     fig = sub.add_parser("figures")
     fig.add_argument("dir", type=Path)
     faces = sub.add_parser("faces")
     faces.add_argument("results", type=Path)
     a = p.parse_args(argv)
     if a.cmd == "one":
-        cmd_one(a.case, a.clamp, a.cells, a.dir, a.end, a.recess, a.box_lower)
+        cmd_one(a.case, a.clamp, a.cells, a.dir, a.end, a.recess, a.box_lower, tuple(a.set))
     elif a.cmd == "run":
-        cmd_run(a.dir, a.cases, a.clamps, a.cells, a.end, a.recess, a.box_lower)
+        cmd_run(a.dir, a.cases, a.clamps, a.cells, a.end, a.recess, a.box_lower, tuple(a.set))
     elif a.cmd == "faces":
         cmd_faces(a.results)
     else:
