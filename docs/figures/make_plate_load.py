@@ -364,9 +364,10 @@ def cmd_coupled(folder: Path, cases, cells: int | None = None) -> None:
                 "held_radius": data["structures"][0]["upper"][0], "steps": s["steps"], "cells": data["grid"]["cells"],
                 "loop_time": s["loop_time"]}) + "\n")
         c = json.loads(path.read_text())
-        euler_file = folder / f"case{case}-c{c.get('cells', 120)}.json"
+        grid = c.get("cells", 120)  # (the runs written before --cells: the examples' 120)
+        euler_file = folder / f"case{case}-c{grid}.json"
         if not euler_file.exists():
-            print(f"case {case}, {c.get('cells', 120)} cells: impulse on the held plate {c['reaction_impulse']:.1f} N s "
+            print(f"case {case}, {grid} cells: impulse on the held plate {c['reaction_impulse']:.1f} N s "
                   f"(coupled, to {c['time_end'] * 1e3:.2f} ms; no euler run of these cells in {folder}); {c['steps']} "
                   f"steps, loop {c['loop_time']:.0f} s")
             continue
